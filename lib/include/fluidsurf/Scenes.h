@@ -1,0 +1,41 @@
+// Scenes.h - deterministic particle scenes with known surfaces, for tests, benchmarks and the
+// demo. Particles sit on a cubic lattice of spacing 2r (r = particle radius); the same
+// parameters give the same particles, bit for bit, on every machine.
+//
+//   single  one particle at the origin (surface: sphere of radius r)
+//   block   n x n x n lattice cube, corner at the origin (n = round(cbrt(count)))
+//   ball    lattice points within rho spacings of the origin (rho from count)
+//   slab    a flat lattice slab `layers` particles thick, jittered in-plane by `jitter` spacings
+//   drop    a ball falling into a pool (a block poolDepthScale times as deep) plus a few
+//           isolated droplets
+#pragma once
+
+#include <fluidsurf/ParticleSet.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+
+enum class Scene { Single, Block, Ball, Slab, Drop };
+
+struct SceneParams
+{
+    double radius = 0.025;       ///< particle radius r, world units
+    size_t count = 10000;        ///< approximate particle count
+    uint64_t seed = 1;           ///< jitter / droplet placement seed
+    double jitter = 0.05;        ///< slab: in-plane jitter amplitude, in lattice spacings
+    int layers = 4;              ///< slab: thickness in particles
+    double poolDepthScale = 1.0; ///< drop: pool depth multiplier (same surface, more interior)
+    int droplets = 5;            ///< drop: isolated single particles
+};
+
+Scene sceneFromName(const std::string& name);  ///< ValueError for an unknown name
+const char* sceneName(Scene scene);
+std::vector<std::string> sceneNames();
+
+/// Particles with an int "id" attribute (0..N-1). ValueError for invalid parameters.
+ParticleSet generateScene(Scene scene, const SceneParams& params);
+
+} // namespace fluidsurf

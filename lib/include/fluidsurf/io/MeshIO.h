@@ -1,0 +1,21 @@
+// MeshIO.h - write triangle meshes: Wavefront OBJ (v, vn, f v//vn), binary little-endian PLY
+// (x y z [nx ny nz] + vertex_indices), legacy VTK POLYDATA (binary). Chosen by extension;
+// written atomically.
+#pragma once
+
+#include <fluidsurf/Mesh.h>
+
+#include <string>
+
+namespace fluidsurf {
+namespace io {
+
+enum class MeshFormat { Unknown, Obj, Ply, Vtk };
+
+MeshFormat meshFormatFromPath(const std::string& path);
+
+/// OutputError for an unknown extension, indices out of range or a failed write.
+void writeMesh(const TriangleMesh& mesh, const std::string& path);
+
+} // namespace io
+} // namespace fluidsurf

@@ -1,0 +1,2 @@
+// Error.cc - anchors the exception vtables in the library.
+#include <fluidsurf/Error.h>

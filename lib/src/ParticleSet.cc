@@ -1,0 +1,141 @@
+// ParticleSet.cc - attribute lookup by name and by role, validation, non-finite filtering.
+#include <fluidsurf/Error.h>
+#include <fluidsurf/ParticleSet.h>
+
+#include <algorithm>
+#include <cstring>
+
+namespace fluidsurf {
+
+const char* Attribute::typeName() const
+{
+    static const char* kFloat[] = {"float", "float2", "float3", "float4"};
+    static const char* kInt[] = {"int", "int2", "int3", "int4"};
+    if (components >= 1 && components <= 4)
+        return type == AttributeType::Float ? kFloat[components - 1] : kInt[components - 1];
+    return type == AttributeType::Float ? "float[]" : "int[]";
+}
+
+const char* roleName(AttributeRole role)
+{
+    switch (role) {
+    case AttributeRole::Radius: return "radius";
+    case AttributeRole::Velocity: return "velocity";
+    case AttributeRole::Density: return "density";
+    case AttributeRole::Id: return "id";
+    }
+    return "?";
+}
+
+const Attribute* ParticleSet::find(const std::string& name) const
+{
+    for (const Attribute& a : attributes)
+        if (a.name == name) return &a;
+    return nullptr;
+}
+
+Attribute* ParticleSet::find(const std::string& name)
+{
+    for (Attribute& a : attributes)
+        if (a.name == name) return &a;
+    return nullptr;
+}
+
+const Attribute* ParticleSet::find(AttributeRole role) const
+{
+    static const char* const kRadius[] = {"pscale", "radius", "Radius", nullptr};
+    static const char* const kVelocity[] = {"v", "velocity", "vel", "Vel", "Velocity", nullptr};
+    static const char* const kDensity[] = {"density", "rho", "Rhop", "Density", nullptr};
+    static const char* const kId[] = {"id", "Idp", "index", "ID", "Id", nullptr};
+    const char* const* aliases = kRadius;
+    int components = 1;
+    bool mustBeFloat = true;
+    switch (role) {
+    case AttributeRole::Radius: break;
+    case AttributeRole::Velocity: aliases = kVelocity; components = 3; break;
+    case AttributeRole::Density: aliases = kDensity; break;
+    case AttributeRole::Id: aliases = kId; mustBeFloat = false; break;  // some writers use floats
+    }
+    for (const char* const* alias = aliases; *alias; ++alias) {
+        const Attribute* a = find(std::string(*alias));
+        if (a && a->components == components && (!mustBeFloat || a->type == AttributeType::Float))
+            return a;
+    }
+    return nullptr;
+}
+
+Attribute& ParticleSet::addFloat(const std::string& name, int components, std::vector<float> values)
+{
+    Attribute a;
+    a.name = name;
+    a.type = AttributeType::Float;
+    a.components = components;
+    a.floats = std::move(values);
+    if (Attribute* old = find(name)) return *old = std::move(a);
+    attributes.push_back(std::move(a));
+    return attributes.back();
+}
+
+Attribute& ParticleSet::addInt(const std::string& name, int components, std::vector<int64_t> values)
+{
+    Attribute a;
+    a.name = name;
+    a.type = AttributeType::Int;
+    a.components = components;
+    a.ints = std::move(values);
+    if (Attribute* old = find(name)) return *old = std::move(a);
+    attributes.push_back(std::move(a));
+    return attributes.back();
+}
+
+BBox3f ParticleSet::bbox() const
+{
+    BBox3f box;
+    for (const Vec3f& p : positions) box.expand(p);
+    return box;
+}
+
+void ParticleSet::validate() const
+{
+    for (const Attribute& a : attributes) {
+        if (a.components < 1)
+            throw ValueError("attribute '" + a.name + "' has no components");
+        if (a.size() != size() * size_t(a.components))
+            throw ValueError("attribute '" + a.name + "' holds " + std::to_string(a.size()) +
+                             " values, expected " + std::to_string(size() * a.components));
+    }
+}
+
+namespace {
+template <typename T>
+void compact(std::vector<T>& values, const std::vector<char>& keep, int components)
+{
+    size_t out = 0;
+    for (size_t i = 0; i < keep.size(); ++i) {
+        if (!keep[i]) continue;
+        if (out != i)
+            std::memmove(&values[out * components], &values[i * components], sizeof(T) * components);
+        ++out;
+    }
+    values.resize(out * components);
+}
+} // namespace
+
+size_t ParticleSet::dropNonFinite()
+{
+    std::vector<char> keep(size());
+    size_t dropped = 0;
+    for (size_t i = 0; i < size(); ++i) {
+        keep[i] = positions[i].isFinite();
+        dropped += !keep[i];
+    }
+    if (dropped == 0) return 0;
+    compact(positions, keep, 1);
+    for (Attribute& a : attributes) {
+        if (a.type == AttributeType::Float) compact(a.floats, keep, a.components);
+        else compact(a.ints, keep, a.components);
+    }
+    return dropped;
+}
+
+} // namespace fluidsurf

@@ -1,0 +1,134 @@
+// Scenes.cc - the generated scenes. Randomness comes from SplitMix64 rather than <random>
+// distributions, whose output differs between standard libraries.
+#include <fluidsurf/Error.h>
+#include <fluidsurf/Scenes.h>
+
+#include <cmath>
+
+namespace fluidsurf {
+
+namespace {
+
+struct SplitMix64
+{
+    uint64_t state;
+    uint64_t next()
+    {
+        uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+        return z ^ (z >> 31);
+    }
+    double uniform() { return double(next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
+};
+
+struct Builder
+{
+    ParticleSet set;
+    double spacing;
+    void add(double x, double y, double z) { set.positions.emplace_back(float(x), float(y), float(z)); }
+};
+
+void addBlock(Builder& b, int nx, int ny, int nz, double ox, double oy, double oz)
+{
+    for (int k = 0; k < nz; ++k)
+        for (int j = 0; j < ny; ++j)
+            for (int i = 0; i < nx; ++i) b.add(ox + i * b.spacing, oy + j * b.spacing, oz + k * b.spacing);
+}
+
+void addBall(Builder& b, double rho, double cx, double cy, double cz)
+{
+    const int m = int(std::ceil(rho));
+    for (int k = -m; k <= m; ++k)
+        for (int j = -m; j <= m; ++j)
+            for (int i = -m; i <= m; ++i)
+                if (double(i) * i + double(j) * j + double(k) * k <= rho * rho)
+                    b.add(cx + i * b.spacing, cy + j * b.spacing, cz + k * b.spacing);
+}
+
+} // namespace
+
+Scene sceneFromName(const std::string& name)
+{
+    if (name == "single") return Scene::Single;
+    if (name == "block") return Scene::Block;
+    if (name == "ball") return Scene::Ball;
+    if (name == "slab") return Scene::Slab;
+    if (name == "drop") return Scene::Drop;
+    throw ValueError("unknown scene '" + name + "' (single, block, ball, slab, drop)");
+}
+
+const char* sceneName(Scene s)
+{
+    switch (s) {
+    case Scene::Single: return "single";
+    case Scene::Block: return "block";
+    case Scene::Ball: return "ball";
+    case Scene::Slab: return "slab";
+    case Scene::Drop: return "drop";
+    }
+    return "?";
+}
+
+std::vector<std::string> sceneNames() { return {"single", "block", "ball", "slab", "drop"}; }
+
+ParticleSet generateScene(Scene scene, const SceneParams& p)
+{
+    if (!(p.radius > 0) || !std::isfinite(p.radius)) throw ValueError("scene radius must be positive");
+    if (p.count < 1 || p.count > (size_t(1) << 31)) throw ValueError("scene count must be 1..2^31");
+    if (p.layers < 1) throw ValueError("slab layers must be >= 1");
+    if (!(p.jitter >= 0 && p.jitter < 0.5)) throw ValueError("slab jitter must be in [0, 0.5) spacings");
+    if (!(p.poolDepthScale > 0)) throw ValueError("pool depth scale must be positive");
+    if (p.droplets < 0 || p.droplets > 1000) throw ValueError("droplets must be 0..1000");
+    Builder b;
+    b.spacing = 2.0 * p.radius;
+    SplitMix64 rng{p.seed};
+    const double n = double(p.count);
+    b.set.positions.reserve(p.count + p.count / 4 + 16);
+    switch (scene) {
+    case Scene::Single: b.add(0, 0, 0); break;
+    case Scene::Block: {
+        const int side = std::max(1, int(std::lround(std::cbrt(n))));
+        addBlock(b, side, side, side, 0, 0, 0);
+        break;
+    }
+    case Scene::Ball: addBall(b, std::cbrt(3.0 * n / (4.0 * M_PI)), 0, 0, 0); break;
+    case Scene::Slab: {
+        const int side = std::max(1, int(std::lround(std::sqrt(n / p.layers))));
+        for (int k = 0; k < p.layers; ++k)
+            for (int j = 0; j < side; ++j)
+                for (int i = 0; i < side; ++i) {
+                    const double jx = (rng.uniform() * 2 - 1) * p.jitter * b.spacing;
+                    const double jy = (rng.uniform() * 2 - 1) * p.jitter * b.spacing;
+                    b.add(i * b.spacing + jx, j * b.spacing + jy, k * b.spacing);
+                }
+        break;
+    }
+    case Scene::Drop: {
+        // Pool: W x W x D with D = W/4 (times the depth scale); 85% of the particles.
+        const int w = std::max(4, int(std::lround(std::cbrt(0.85 * n * 4.0))));
+        const int d = std::max(1, int(std::lround(w / 4.0 * p.poolDepthScale)));
+        addBlock(b, w, w, d, 0, 0, 0);
+        // Ball above the middle of the pool, 15% of the particles, a few radii of air between.
+        const double rho = std::max(1.0, std::cbrt(3.0 * 0.15 * n / (4.0 * M_PI)));
+        const double c = (w - 1) * b.spacing / 2;
+        const double top = (d - 1) * b.spacing;
+        const double cz = top + (rho + 4) * b.spacing;
+        addBall(b, rho, c, c, cz);
+        // Droplets: single particles in the air beside the ball, at least 6 spacings from it
+        // and 4 above the pool, so that no other particle lies within the SPH support 4r.
+        for (int i = 0; i < p.droplets; ++i) {
+            const double angle = 2 * M_PI * (i + rng.uniform() * 0.5) / std::max(1, p.droplets);
+            const double dist = (rho + 6 + 3 * rng.uniform()) * b.spacing;
+            b.add(c + dist * std::cos(angle), c + dist * std::sin(angle), cz + (rng.uniform() * 2 - 1) * rho * b.spacing);
+        }
+        break;
+    }
+    }
+    std::vector<int64_t> ids(b.set.size());
+    for (size_t i = 0; i < ids.size(); ++i) ids[i] = int64_t(i);
+    b.set.addInt("id", 1, std::move(ids));
+    return std::move(b.set);
+}
+
+} // namespace fluidsurf

@@ -1,0 +1,122 @@
+// FileBuffer.cc - file loading and zlib wrappers (zlib from Debian's zlib1g-dev).
+#include "io/FileBuffer.h"
+
+#include <fluidsurf/Error.h>
+
+#include <zlib.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <sys/stat.h>
+
+namespace fluidsurf {
+namespace io_internal {
+
+std::vector<uint8_t> readFile(const std::string& path)
+{
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0)
+        throw InputError(path + ": cannot open: " + std::strerror(errno));
+    if (S_ISDIR(st.st_mode)) throw InputError(path + ": is a directory, not a file");
+    std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+    if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
+    std::vector<uint8_t> data;
+    if (S_ISREG(st.st_mode)) data.reserve(size_t(st.st_size));
+    uint8_t chunk[1 << 16];
+    if (S_ISREG(st.st_mode) && st.st_size > 0) {
+        data.resize(size_t(st.st_size));
+        size_t got = std::fread(data.data(), 1, data.size(), f.get());
+        data.resize(got);
+    }
+    // Anything beyond the stat size (pipes, growing files) is read in chunks.
+    for (size_t n; (n = std::fread(chunk, 1, sizeof(chunk), f.get())) > 0;)
+        data.insert(data.end(), chunk, chunk + n);
+    if (std::ferror(f.get())) throw InputError(path + ": read error: " + std::strerror(errno));
+    return data;
+}
+
+bool isGzip(const uint8_t* data, size_t size)
+{
+    return size >= 2 && data[0] == 0x1f && data[1] == 0x8b;
+}
+
+std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string& source,
+                            size_t maxOutput)
+{
+    z_stream zs{};
+    if (inflateInit2(&zs, 15 + 16) != Z_OK) throw InputError(source + ": zlib init failed");
+    std::vector<uint8_t> out;
+    out.resize(std::max<size_t>(size * 3, 1 << 16));
+    zs.next_in = const_cast<Bytef*>(data);
+    size_t consumed = 0;
+    int ret = Z_OK;
+    // zlib's avail_in is 32-bit: feed large inputs in slices.
+    while (true) {
+        if (zs.avail_in == 0 && consumed < size) {
+            const size_t slice = std::min<size_t>(size - consumed, 1u << 30);
+            zs.next_in = const_cast<Bytef*>(data + consumed);
+            zs.avail_in = uInt(slice);
+            consumed += slice;
+        }
+        if (zs.total_out == out.size()) {
+            if (out.size() >= maxOutput) {
+                inflateEnd(&zs);
+                throw InputError(source + ": gzip data expands beyond " +
+                                 std::to_string(maxOutput) + " bytes");
+            }
+            out.resize(std::min(out.size() * 2, maxOutput));
+        }
+        const size_t room = std::min<size_t>(out.size() - zs.total_out, 1u << 30);
+        zs.next_out = out.data() + zs.total_out;
+        zs.avail_out = uInt(room);
+        ret = inflate(&zs, Z_NO_FLUSH);
+        if (ret == Z_STREAM_END) break;
+        if (ret != Z_OK && ret != Z_BUF_ERROR) {
+            const std::string msg = zs.msg ? zs.msg : "corrupt data";
+            const size_t at = zs.total_in;
+            inflateEnd(&zs);
+            throw InputError(source + ": gzip stream is corrupt: " + msg + " (at compressed byte " +
+                             std::to_string(at) + ")");
+        }
+        if (ret == Z_BUF_ERROR && zs.avail_in == 0 && consumed >= size) {
+            inflateEnd(&zs);
+            throw InputError(source + ": gzip stream is truncated (ends after " +
+                             std::to_string(size) + " compressed bytes)");
+        }
+    }
+    out.resize(zs.total_out);
+    inflateEnd(&zs);
+    return out;
+}
+
+void zlibInflate(const uint8_t* src, size_t srcSize, uint8_t* dst, size_t dstSize,
+                 const std::string& source)
+{
+    uLongf outLen = uLongf(dstSize);
+    const int ret = uncompress(dst, &outLen, src, uLong(srcSize));
+    if (ret != Z_OK || outLen != dstSize)
+        throw InputError(source + ": zlib-compressed block is corrupt or truncated (" +
+                         std::string(ret == Z_OK ? "size mismatch" : zError(ret)) + ")");
+}
+
+std::vector<uint8_t> gzipCompress(const uint8_t* data, size_t size, int level)
+{
+    z_stream zs{};
+    if (deflateInit2(&zs, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+        throw OutputError("zlib deflate init failed");
+    std::vector<uint8_t> out(deflateBound(&zs, uLong(size)) + 64);
+    zs.next_in = const_cast<Bytef*>(data);
+    zs.avail_in = uInt(size);
+    zs.next_out = out.data();
+    zs.avail_out = uInt(out.size());
+    const int ret = deflate(&zs, Z_FINISH);
+    deflateEnd(&zs);
+    if (ret != Z_STREAM_END) throw OutputError("gzip compression failed");
+    out.resize(zs.total_out);
+    return out;
+}
+
+} // namespace io_internal
+} // namespace fluidsurf

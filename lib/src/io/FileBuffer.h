@@ -1,0 +1,28 @@
+// FileBuffer.h - whole-file loading and zlib/gzip helpers shared by the readers and writers.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+namespace io_internal {
+
+/// Read a whole file; InputError with a clear reason (missing, directory, unreadable).
+std::vector<uint8_t> readFile(const std::string& path);
+
+bool isGzip(const uint8_t* data, size_t size);
+
+/// Inflate a gzip stream (growing the output as data arrives: no size is trusted up front).
+/// maxOutput guards against decompression bombs.
+std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string& source,
+                            size_t maxOutput = size_t(1) << 36);
+
+/// Inflate one zlib block whose decompressed size is known (VTK XML blocks).
+void zlibInflate(const uint8_t* src, size_t srcSize, uint8_t* dst, size_t dstSize,
+                 const std::string& source);
+
+std::vector<uint8_t> gzipCompress(const uint8_t* data, size_t size, int level = 6);
+
+} // namespace io_internal
+} // namespace fluidsurf

@@ -1,0 +1,36 @@
+// Formats.h - the per-format readers and encoders behind ParticleIO.h. Each reader takes the
+// whole file in memory and a source name for messages; each encoder returns the file's bytes.
+#pragma once
+
+#include <fluidsurf/ParticleSet.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+namespace io_internal {
+
+using Bytes = std::vector<uint8_t>;
+
+ParticleSet readVtkLegacy(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+ParticleSet readVtkXml(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+
+Bytes encodeBgeo(const ParticleSet& particles);
+Bytes encodeVtkLegacy(const ParticleSet& particles);
+Bytes encodePly(const ParticleSet& particles);
+Bytes encodeXyz(const ParticleSet& particles);
+void writeVdbPoints(const ParticleSet& particles, const std::string& path, bool compress);
+
+/// Parse a decimal number of the whole token (no trailing garbage); false if it is not one.
+bool parseFloat(const char* begin, const char* end, double& value);
+bool parseInt(const char* begin, const char* end, int64_t& value);
+
+} // namespace io_internal
+} // namespace fluidsurf

@@ -1,0 +1,85 @@
+// NpyReader.cc - NumPy .npy arrays of shape (N, 3), float32 or float64, either byte order,
+// C or Fortran order (format versions 1.0, 2.0 and 3.0).
+#include "io/TextParse.h"
+
+#include <fluidsurf/Error.h>
+
+namespace fluidsurf {
+namespace io_internal {
+
+namespace {
+/// Value of 'key' in the header dict, up to the next top-level ',' or '}'.
+std::string dictValue(const std::string& h, const std::string& key)
+{
+    size_t k = h.find("'" + key + "'");
+    if (k == std::string::npos) return "";
+    k = h.find(':', k);
+    if (k == std::string::npos) return "";
+    ++k;
+    int depth = 0;
+    size_t e = k;
+    for (; e < h.size(); ++e) {
+        if (h[e] == '(') ++depth;
+        else if (h[e] == ')') --depth;
+        else if ((h[e] == ',' || h[e] == '}') && depth == 0) break;
+    }
+    std::string v = h.substr(k, e - k);
+    size_t a = 0, b = v.size();
+    while (a < b && isSpace(uint8_t(v[a]))) ++a;
+    while (b > a && isSpace(uint8_t(v[b - 1]))) --b;
+    return v.substr(a, b - a);
+}
+} // namespace
+
+ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+{
+    ByteReader in(data, size, src);
+    if (size < 10 || std::memcmp(data, "\x93NUMPY", 6) != 0) in.failAt(0, "not a NumPy .npy file (missing \\x93NUMPY magic)");
+    in.skip(6, "magic");
+    const uint8_t major = *in.take(1, "version");
+    in.skip(1, "version");
+    if (major < 1 || major > 3) in.failAt(6, "unsupported .npy version " + std::to_string(major));
+    const size_t headerLen = major == 1 ? in.read<uint16_t>(false, "header length") : in.read<uint32_t>(false, "header length");
+    const uint8_t* hp = in.take(headerLen, "header");
+    const std::string h(reinterpret_cast<const char*>(hp), headerLen);
+    const std::string descr = dictValue(h, "descr");
+    const std::string order = dictValue(h, "fortran_order");
+    const std::string shape = dictValue(h, "shape");
+    size_t item = 0;
+    bool big = false;
+    if (descr == "'<f4'" || descr == "'=f4'") item = 4;
+    else if (descr == "'<f8'" || descr == "'=f8'") item = 8;
+    else if (descr == "'>f4'") { item = 4; big = true; }
+    else if (descr == "'>f8'") { item = 8; big = true; }
+    else in.failAt(10, "unsupported dtype " + (descr.empty() ? std::string("(none)") : descr.substr(0, 20)) + " (float32 or float64 expected)");
+    if (order != "False" && order != "True") in.failAt(10, "bad fortran_order in header");
+    const bool fortran = order == "True";
+    // shape "(N, 3)"
+    std::vector<std::string> dims;
+    if (shape.size() < 2 || shape.front() != '(' || shape.back() != ')') in.failAt(10, "bad shape in header");
+    {
+        std::string cur;
+        for (char c : shape.substr(1, shape.size() - 2)) {
+            if (c == ',') { dims.push_back(cur); cur.clear(); }
+            else if (!isSpace(uint8_t(c))) cur += c;
+        }
+        if (!cur.empty()) dims.push_back(cur);
+    }
+    if (dims.size() != 2 || dims[1] != "3")
+        in.failAt(10, "array shape " + shape.substr(0, 40) + " is not (N, 3)");
+    const uint64_t n = parseCount(in, dims[0], "row count");
+    const size_t rows = in.checkedCount(n, 3 * item, "rows");
+    const uint8_t* p = in.take(rows * 3 * item, "array data");
+    ParticleSet set;
+    set.positions.resize(rows);
+    for (size_t i = 0; i < rows; ++i)
+        for (int c = 0; c < 3; ++c) {
+            const size_t k = fortran ? size_t(c) * rows + i : i * 3 + size_t(c);
+            set.positions[i][c] = item == 4 ? loadAs<float>(p + 4 * k, big) : float(loadAs<double>(p + 8 * k, big));
+        }
+    if (detail) *detail = std::string(item == 4 ? "float32" : "float64") + (fortran ? ", Fortran order" : "");
+    return set;
+}
+
+} // namespace io_internal
+} // namespace fluidsurf

@@ -1,0 +1,165 @@
+// ParticleIO.cc - format selection (extension, then content check), the common checks every
+// frame passes (non-finite positions, empty frames, attribute sizes) and atomic writing.
+#include <fluidsurf/io/ParticleIO.h>
+
+#include "io/FileBuffer.h"
+#include "io/Formats.h"
+#include "io/TextParse.h"
+
+#include <fluidsurf/Error.h>
+#include <fluidsurf/io/AtomicFile.h>
+
+namespace fluidsurf {
+namespace io {
+
+using namespace io_internal;
+
+namespace {
+bool endsWith(const std::string& s, const std::string& suffix)
+{
+    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+} // namespace
+
+ParticleFormat formatFromPath(const std::string& path)
+{
+    const std::string p = lower(path);
+    if (endsWith(p, ".vtk")) return ParticleFormat::VtkLegacy;
+    if (endsWith(p, ".vtu") || endsWith(p, ".vtp")) return ParticleFormat::VtkXml;
+    if (endsWith(p, ".bgeo") || endsWith(p, ".bgeo.gz") || endsWith(p, ".bgeogz")) return ParticleFormat::Bgeo;
+    if (endsWith(p, ".ply")) return ParticleFormat::Ply;
+    if (endsWith(p, ".xyz")) return ParticleFormat::Xyz;
+    if (endsWith(p, ".csv") || endsWith(p, ".txt")) return ParticleFormat::Csv;
+    if (endsWith(p, ".npy")) return ParticleFormat::Npy;
+    if (endsWith(p, ".vdb")) return ParticleFormat::VdbPoints;
+    return ParticleFormat::Unknown;
+}
+
+ParticleFormat formatFromContent(const uint8_t* d, size_t n)
+{
+    auto starts = [&](const char* magic) { return n >= std::strlen(magic) && std::memcmp(d, magic, std::strlen(magic)) == 0; };
+    if (starts("# vtk DataFile")) return ParticleFormat::VtkLegacy;
+    if (starts("BgeoV") || isGzip(d, n)) return ParticleFormat::Bgeo;  // gzip: BGEO is our only gzip format
+    if (starts("ply\n") || starts("ply\r")) return ParticleFormat::Ply;
+    if (starts("\x93NUMPY")) return ParticleFormat::Npy;
+    if (n >= 4 && d[0] == 0x20 && d[1] == 0xBD && d[2] == 0xB3 && d[3] == 0x56) return ParticleFormat::VdbPoints;
+    if (starts("<?xml") || starts("<VTKFile")) return ParticleFormat::VtkXml;
+    return ParticleFormat::Unknown;
+}
+
+const char* formatName(ParticleFormat f)
+{
+    switch (f) {
+    case ParticleFormat::VtkLegacy: return "legacy VTK";
+    case ParticleFormat::VtkXml: return "VTK XML";
+    case ParticleFormat::Bgeo: return "Houdini BGEO";
+    case ParticleFormat::Ply: return "PLY";
+    case ParticleFormat::Xyz: return "raw XYZ";
+    case ParticleFormat::Csv: return "CSV/text";
+    case ParticleFormat::Npy: return "NumPy .npy";
+    case ParticleFormat::VdbPoints: return "OpenVDB points";
+    case ParticleFormat::Unknown: break;
+    }
+    return "unknown";
+}
+
+bool canWriteParticles(ParticleFormat f)
+{
+    return f == ParticleFormat::VdbPoints || f == ParticleFormat::Bgeo || f == ParticleFormat::Ply ||
+           f == ParticleFormat::Xyz || f == ParticleFormat::VtkLegacy;
+}
+
+ParticleSet readParticlesFromMemory(const uint8_t* data, size_t size, ParticleFormat format,
+                                    const std::string& source, const ReadOptions& options, ReadInfo* info)
+{
+    if (size == 0) throw InputError(source + ": file is empty");
+    const ParticleFormat content = formatFromContent(data, size);
+    if (content != ParticleFormat::Unknown && content != format &&
+        !(format == ParticleFormat::VtkXml && content == ParticleFormat::VtkXml))
+        throw InputError(source + ": the name says " + formatName(format) + " but the content is " +
+                         formatName(content) + " (at byte 0)");
+    std::string detail;
+    ParticleSet set;
+    switch (format) {
+    case ParticleFormat::VtkLegacy: set = readVtkLegacy(data, size, source, &detail); break;
+    case ParticleFormat::VtkXml: set = readVtkXml(data, size, source, &detail); break;
+    case ParticleFormat::Bgeo: set = readBgeo(data, size, source, &detail); break;
+    case ParticleFormat::Ply: set = readPly(data, size, source, &detail); break;
+    case ParticleFormat::Xyz: set = readXyz(data, size, source, &detail); break;
+    case ParticleFormat::Csv: set = readCsv(data, size, source, &detail); break;
+    case ParticleFormat::Npy: set = readNpy(data, size, source, &detail); break;
+    case ParticleFormat::VdbPoints: set = readVdbPoints(data, size, source, &detail); break;
+    case ParticleFormat::Unknown:
+        throw InputError(source + ": unknown particle file type (extensions: .vtk .vtu .vtp .bgeo "
+                                  ".bgeo.gz .ply .xyz .csv .txt .npy .vdb)");
+    }
+    try {
+        set.validate();
+    } catch (const ValueError& e) {
+        throw InputError(source + ": " + e.what());
+    }
+    size_t bad = 0, firstBad = 0;
+    for (size_t i = 0; i < set.size(); ++i)
+        if (!set.positions[i].isFinite() && bad++ == 0) firstBad = i;
+    size_t dropped = 0;
+    if (bad && !options.dropNonFinite)
+        throw InputError(source + ": " + std::to_string(bad) + " particle(s) have NaN/Inf coordinates (first: particle " +
+                         std::to_string(firstBad) + "); use --drop-nonfinite to drop them");
+    if (bad) dropped = set.dropNonFinite();
+    if (set.empty() && !options.allowEmpty)
+        throw InputError(source + ": contains no particles" +
+                         std::string(dropped ? " after dropping non-finite ones" : ""));
+    if (info) {
+        info->format = format;
+        info->detail = detail;
+        info->fileBytes = size;
+        info->droppedNonFinite = dropped;
+    }
+    return set;
+}
+
+ParticleSet readParticles(const std::string& path, const ReadOptions& options, ReadInfo* info)
+{
+    const ParticleFormat format = formatFromPath(path);
+    if (format == ParticleFormat::Unknown)
+        throw InputError(path + ": unknown particle file type (extensions: .vtk .vtu .vtp .bgeo "
+                                ".bgeo.gz .ply .xyz .csv .txt .npy .vdb)");
+    const std::vector<uint8_t> data = readFile(path);
+    return readParticlesFromMemory(data.data(), data.size(), format, path, options, info);
+}
+
+void writeParticles(const ParticleSet& particles, const std::string& path, const WriteOptions& options)
+{
+    const ParticleFormat format = formatFromPath(path);
+    if (!canWriteParticles(format))
+        throw OutputError(path + ": cannot write particles as " + formatName(format) +
+                          " (writable: .vdb .bgeo .bgeo.gz .ply .xyz .vtk)");
+    try {
+        particles.validate();
+    } catch (const ValueError& e) {
+        throw OutputError(path + ": " + e.what());
+    }
+    Bytes bytes;
+    try {
+        switch (format) {
+    case ParticleFormat::VdbPoints: writeVdbPoints(particles, path, options.compress); return;
+    case ParticleFormat::Bgeo: {
+        bytes = encodeBgeo(particles);
+        const std::string p = lower(path);
+        if (endsWith(p, ".gz") || endsWith(p, "gz")) bytes = gzipCompress(bytes.data(), bytes.size());
+        break;
+    }
+    case ParticleFormat::Ply: bytes = encodePly(particles); break;
+    case ParticleFormat::Xyz: bytes = encodeXyz(particles); break;
+    case ParticleFormat::VtkLegacy: bytes = encodeVtkLegacy(particles); break;
+    default: break;
+        }
+    } catch (const OutputError& e) {
+        const std::string msg = e.what();
+        throw OutputError(msg.rfind(path, 0) == 0 ? msg : path + ": " + msg);
+    }
+    writeFileAtomic(path, bytes.data(), bytes.size());
+}
+
+} // namespace io
+} // namespace fluidsurf

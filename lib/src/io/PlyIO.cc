@@ -1,0 +1,249 @@
+// PlyIO.cc - PLY point clouds: ascii, binary_little_endian and binary_big_endian; x, y, z as
+// float or double; other vertex properties become attributes (properties named base_0, base_1,
+// ... are regrouped into one multi-component attribute, which is how the writer stores them).
+// Elements before "vertex" (and list properties) are read past; elements after it are ignored.
+#include "io/TextParse.h"
+
+#include <fluidsurf/Error.h>
+
+#include <limits>
+
+namespace fluidsurf {
+namespace io_internal {
+
+namespace {
+
+struct PlyType
+{
+    size_t size = 0;
+    bool isFloat = false, isSigned = false;
+};
+
+bool plyType(const std::string& n, PlyType& t)
+{
+    if (n == "char" || n == "int8") t = {1, false, true};
+    else if (n == "uchar" || n == "uint8") t = {1, false, false};
+    else if (n == "short" || n == "int16") t = {2, false, true};
+    else if (n == "ushort" || n == "uint16") t = {2, false, false};
+    else if (n == "int" || n == "int32") t = {4, false, true};
+    else if (n == "uint" || n == "uint32") t = {4, false, false};
+    else if (n == "float" || n == "float32") t = {4, true, true};
+    else if (n == "double" || n == "float64") t = {8, true, true};
+    else return false;
+    return true;
+}
+
+struct PlyProperty
+{
+    std::string name;
+    PlyType type;
+    bool isList = false;
+    PlyType countType;
+};
+
+struct PlyElement
+{
+    std::string name;
+    uint64_t count = 0;
+    std::vector<PlyProperty> props;
+};
+
+double loadNumber(const uint8_t* p, const PlyType& t, bool be)
+{
+    if (t.isFloat) return t.size == 4 ? double(loadAs<float>(p, be)) : loadAs<double>(p, be);
+    switch (t.size) {
+    case 1: return t.isSigned ? double(int8_t(*p)) : double(*p);
+    case 2: return t.isSigned ? double(loadAs<int16_t>(p, be)) : double(loadAs<uint16_t>(p, be));
+    default: return t.isSigned ? double(loadAs<int32_t>(p, be)) : double(loadAs<uint32_t>(p, be));
+    }
+}
+
+/// Split "name_3" into ("name", 3); false when there is no numeric suffix.
+bool splitIndexed(const std::string& n, std::string& base, int& index)
+{
+    const size_t us = n.find_last_of('_');
+    if (us == std::string::npos || us == 0 || us + 1 >= n.size() || n.size() - us > 3) return false;
+    index = 0;
+    for (size_t i = us + 1; i < n.size(); ++i) {
+        if (!std::isdigit(uint8_t(n[i]))) return false;
+        index = index * 10 + (n[i] - '0');
+    }
+    base = n.substr(0, us);
+    return true;
+}
+
+} // namespace
+
+ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+{
+    ByteReader in(data, size, src);
+    if (size < 4 || std::memcmp(data, "ply", 3) != 0 || (data[3] != '\n' && data[3] != '\r'))
+        in.failAt(0, "not a PLY file (missing 'ply' magic line)");
+    in.line("magic");
+    enum { Ascii, LE, BE } fmt = Ascii;
+    bool haveFormat = false;
+    std::vector<PlyElement> elements;
+    while (true) {
+        const auto w = splitWords(in.line("the PLY header"));
+        if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
+        if (w[0] == "end_header") break;
+        if (w[0] == "format") {
+            if (w.size() < 3) in.fail("incomplete format line");
+            if (w[1] == "ascii") fmt = Ascii;
+            else if (w[1] == "binary_little_endian") fmt = LE;
+            else if (w[1] == "binary_big_endian") fmt = BE;
+            else in.fail("unknown PLY format '" + w[1].substr(0, 40) + "'");
+            haveFormat = true;
+        } else if (w[0] == "element") {
+            if (w.size() < 3) in.fail("incomplete element line");
+            elements.push_back({w[1], parseCount(in, w[2], "element count"), {}});
+        } else if (w[0] == "property") {
+            if (elements.empty()) in.fail("property before any element");
+            PlyProperty p;
+            if (w.size() >= 5 && w[1] == "list") {
+                p.isList = true;
+                if (!plyType(w[2], p.countType) || !plyType(w[3], p.type) || p.countType.isFloat)
+                    in.fail("bad list property types '" + w[2] + " " + w[3] + "'");
+                p.name = w[4];
+            } else {
+                if (w.size() < 3 || !plyType(w[1], p.type)) in.fail("bad property line");
+                p.name = w[2];
+            }
+            elements.back().props.push_back(p);
+        } else {
+            in.fail("unexpected PLY header line '" + w[0].substr(0, 40) + "'");
+        }
+    }
+    if (!haveFormat) in.fail("PLY header has no format line");
+    const bool be = fmt == BE;
+
+    ParticleSet set;
+    bool found = false;
+    for (const PlyElement& e : elements) {
+        const bool isVertex = e.name == "vertex";
+        size_t stride = 0;
+        bool fixed = true;
+        for (const PlyProperty& p : e.props) {
+            fixed = fixed && !p.isList;
+            stride += p.type.size;
+        }
+        if (isVertex) {
+            if (found) in.fail("second vertex element");
+            found = true;
+            int ix = -1, iy = -1, iz = -1;
+            for (size_t k = 0; k < e.props.size(); ++k) {
+                if (e.props[k].isList) in.fail("list property '" + e.props[k].name + "' in vertex element");
+                if (e.props[k].name == "x") ix = int(k);
+                if (e.props[k].name == "y") iy = int(k);
+                if (e.props[k].name == "z") iz = int(k);
+            }
+            if (ix < 0 || iy < 0 || iz < 0) in.fail("vertex element lacks x, y, z properties");
+            const size_t n = in.checkedCount(e.count, fmt == Ascii ? 2 * e.props.size() : stride, "vertices");
+            std::vector<double> values(n * e.props.size());
+            if (fmt == Ascii) {
+                for (size_t i = 0; i < values.size(); ++i) values[i] = readAsciiNumber(in, "vertex data");
+            } else {
+                const uint8_t* p = in.take(n * stride, "vertex data");
+                for (size_t i = 0; i < n; ++i)
+                    for (const PlyProperty& prop : e.props) {
+                        values[&prop - e.props.data() + i * e.props.size()] = loadNumber(p, prop.type, be);
+                        p += prop.type.size;
+                    }
+            }
+            const size_t np = e.props.size();
+            set.positions.resize(n);
+            for (size_t i = 0; i < n; ++i)
+                set.positions[i] = Vec3f(float(values[i * np + ix]), float(values[i * np + iy]), float(values[i * np + iz]));
+            // Remaining properties, regrouping base_0..base_k-1 runs.
+            for (size_t k = 0; k < np;) {
+                if (int(k) == ix || int(k) == iy || int(k) == iz) { ++k; continue; }
+                std::string base, base2;
+                int idx = 0, idx2 = 0;
+                size_t run = 1;
+                if (splitIndexed(e.props[k].name, base, idx) && idx == 0) {
+                    while (k + run < np && splitIndexed(e.props[k + run].name, base2, idx2) && base2 == base &&
+                           idx2 == int(run) && e.props[k + run].type.isFloat == e.props[k].type.isFloat)
+                        ++run;
+                }
+                const std::string name = run > 1 ? base : e.props[k].name;
+                const int comps = int(run);
+                if (e.props[k].type.isFloat) {
+                    std::vector<float> v(n * comps);
+                    for (size_t i = 0; i < n; ++i)
+                        for (int c = 0; c < comps; ++c) v[i * comps + c] = float(values[i * np + k + c]);
+                    set.addFloat(name, comps, std::move(v));
+                } else {
+                    std::vector<int64_t> v(n * comps);
+                    for (size_t i = 0; i < n; ++i)
+                        for (int c = 0; c < comps; ++c) v[i * comps + c] = int64_t(values[i * np + k + c]);
+                    set.addInt(name, comps, std::move(v));
+                }
+                k += run;
+            }
+            break;
+        }
+        // Skip an element that precedes the vertices.
+        if (fmt == Ascii) {
+            const size_t n = in.checkedCount(e.count, 1, "elements");
+            for (size_t i = 0; i < n; ++i)
+                for (const PlyProperty& p : e.props) {
+                    size_t items = 1;
+                    if (p.isList) items = in.checkedCount(uint64_t(readAsciiNumber(in, "list count")), 1, "list items");
+                    for (size_t j = 0; j < items; ++j) readAsciiNumber(in, "element data");
+                }
+        } else if (fixed) {
+            in.skip(in.checkedCount(e.count, std::max<size_t>(stride, 1), "elements") * stride, "element data");
+        } else {
+            const size_t n = in.checkedCount(e.count, 1, "elements");
+            for (size_t i = 0; i < n; ++i)
+                for (const PlyProperty& p : e.props) {
+                    size_t items = 1;
+                    if (p.isList) items = size_t(loadNumber(in.take(p.countType.size, "list count"), p.countType, be));
+                    in.skip(in.checkedCount(items, p.type.size, "list items") * p.type.size, "element data");
+                }
+        }
+    }
+    if (!found) in.fail("PLY file has no vertex element");
+    if (detail) *detail = fmt == Ascii ? "ascii" : (be ? "binary big-endian" : "binary little-endian");
+    return set;
+}
+
+Bytes encodePly(const ParticleSet& ps)
+{
+    ps.validate();
+    std::string h = "ply\nformat binary_little_endian 1.0\ncomment written by fluidsurf\n";
+    h += "element vertex " + std::to_string(ps.size()) + "\n";
+    h += "property float x\nproperty float y\nproperty float z\n";
+    size_t stride = 12;
+    for (const Attribute& a : ps.attributes) {
+        if (a.name.empty() || a.name.find_first_of(" \t\r\n") != std::string::npos)
+            throw OutputError("attribute name '" + a.name + "' cannot be stored in PLY");
+        for (int64_t v : a.ints)
+            if (v < std::numeric_limits<int32_t>::min() || v > std::numeric_limits<int32_t>::max())
+                throw OutputError("attribute '" + a.name + "' holds " + std::to_string(v) + ", beyond PLY's int32");
+        const char* type = a.type == AttributeType::Float ? "float" : "int";
+        for (int c = 0; c < a.components; ++c)
+            h += std::string("property ") + type + " " +
+                 (a.components > 1 ? a.name + "_" + std::to_string(c) : a.name) + "\n";
+        stride += 4 * size_t(a.components);
+    }
+    h += "end_header\n";
+    Bytes out(h.begin(), h.end());
+    const size_t start = out.size();
+    out.resize(start + stride * ps.size());
+    uint8_t* p = out.data() + start;
+    for (size_t i = 0; i < ps.size(); ++i) {
+        std::memcpy(p, &ps.positions[i], 12);
+        p += 12;
+        for (const Attribute& a : ps.attributes)
+            for (int c = 0; c < a.components; ++c, p += 4) {
+                const size_t k = i * a.components + c;
+                if (a.type == AttributeType::Float) std::memcpy(p, &a.floats[k], 4);
+                else { const int32_t v = int32_t(a.ints[k]); std::memcpy(p, &v, 4); }
+            }
+    }
+    return out;
+}
+
+} // namespace io_internal
+} // namespace fluidsurf

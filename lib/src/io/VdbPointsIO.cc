@@ -1,0 +1,229 @@
+// VdbPointsIO.cc - OpenVDB points (.vdb PointDataGrid with a "P" attribute), read and write.
+//
+// Bit-exact positions: VDB stores a point as its voxel plus a float offset inside the voxel.
+// With a power-of-two voxel size and no translation, index-space coordinates are exact scalings
+// of the float32 world coordinates, the offset keeps all 24 mantissa bits, and converting back
+// in double reproduces the original float exactly. Point order is not part of a VDB (points
+// are bucketed by voxel), so a round trip keeps each particle, not their order.
+#include "io/Formats.h"
+
+#include <fluidsurf/Error.h>
+#include <fluidsurf/io/AtomicFile.h>
+
+#include <openvdb/io/Stream.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/points/PointConversion.h>
+#include <openvdb/points/PointDataGrid.h>
+
+#include <cmath>
+#include <sstream>
+#include <streambuf>
+
+namespace fluidsurf {
+namespace io_internal {
+
+namespace {
+
+/// Read-only streambuf over a memory block (no copy of the file).
+struct MemoryBuf : std::streambuf
+{
+    MemoryBuf(const uint8_t* d, size_t n)
+    {
+        char* p = const_cast<char*>(reinterpret_cast<const char*>(d));
+        setg(p, p, p + n);
+    }
+    pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override
+    {
+        char* target = (dir == std::ios_base::beg ? eback() : dir == std::ios_base::cur ? gptr() : egptr()) + off;
+        if (target < eback() || target > egptr()) return pos_type(off_type(-1));
+        setg(eback(), target, egptr());
+        return pos_type(target - eback());
+    }
+    pos_type seekpos(pos_type pos, std::ios_base::openmode m) override
+    {
+        return seekoff(off_type(pos), std::ios_base::beg, m);
+    }
+};
+
+template <typename T>
+void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx, int stride, T* out)
+{
+    openvdb::points::AttributeHandle<T> h(array);
+    for (int c = 0; c < stride; ++c) out[c] = h.get(idx, openvdb::Index(c));
+}
+
+} // namespace
+
+ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+{
+    openvdb::initialize();
+    if (size < 8 || !(data[0] == 0x20 && data[1] == 0xBD && data[2] == 0xB3 && data[3] == 0x56))
+        throw InputError(src + ": not an OpenVDB file (missing VDB magic) (at byte 0)");
+    openvdb::GridPtrVecPtr grids;
+    try {
+        MemoryBuf buf(data, size);
+        std::istream stream(&buf);
+        openvdb::io::Stream vdb(stream);
+        grids = vdb.getGrids();
+    } catch (const std::exception& e) {
+        throw InputError(src + ": cannot read VDB: " + e.what());
+    }
+    openvdb::points::PointDataGrid::Ptr grid;
+    std::string names;
+    for (auto& g : *grids) {
+        names += (names.empty() ? "" : ", ") + g->getName() + " (" + g->valueType() + ")";
+        auto pg = openvdb::gridPtrCast<openvdb::points::PointDataGrid>(g);
+        if (!pg || grid) continue;
+        auto leaf = pg->tree().cbeginLeaf();
+        if (!leaf || leaf->attributeSet().find("P") != openvdb::points::AttributeSet::INVALID_POS) grid = pg;
+    }
+    if (!grid)
+        throw InputError(src + ": no PointDataGrid with a \"P\" attribute in this VDB (grids: " +
+                         (names.empty() ? std::string("none") : names) + ")");
+
+    ParticleSet set;
+    const openvdb::math::Transform& xform = grid->transform();
+    auto first = grid->tree().cbeginLeaf();
+    if (!first) {
+        if (detail) *detail = "grid '" + grid->getName() + "', empty";
+        return set;
+    }
+    // Attribute layout from the first leaf's descriptor (shared by all leaves).
+    struct Column { std::string name; size_t pos; int stride; enum { F, F3, D, D3, I32, I64, I3 } kind; };
+    std::vector<Column> columns;
+    std::string skipped;
+    const auto& desc = first->attributeSet().descriptor();
+    for (const auto& [name, pos] : desc.map()) {
+        if (name == "P") continue;
+        const auto& type = desc.type(pos).first;
+        const int stride = int(first->constAttributeArray(pos).stride());
+        Column c{name, pos, stride, Column::F};
+        if (type == "float") c.kind = Column::F;
+        else if (type == "vec3s") c.kind = Column::F3;
+        else if (type == "double") c.kind = Column::D;
+        else if (type == "vec3d") c.kind = Column::D3;
+        else if (type == "int32") c.kind = Column::I32;
+        else if (type == "int64") c.kind = Column::I64;
+        else if (type == "vec3i") c.kind = Column::I3;
+        else { skipped += (skipped.empty() ? "" : ", ") + name + " (" + type + ")"; continue; }
+        columns.push_back(c);
+    }
+    const size_t posIndex = desc.find("P");
+    const auto pType = desc.type(posIndex).first;
+    if (pType != "vec3s") throw InputError(src + ": \"P\" has type " + pType + ", vec3s expected");
+    std::vector<std::vector<float>> fcols(columns.size());
+    std::vector<std::vector<int64_t>> icols(columns.size());
+    auto isFloat = [](const Column& c) { return c.kind <= Column::D3; };
+    auto comps = [](const Column& c) { return (c.kind == Column::F3 || c.kind == Column::D3 || c.kind == Column::I3) ? 3 * c.stride : c.stride; };
+
+    for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
+        if (leaf->attributeSet().descriptor().map() != desc.map())
+            throw InputError(src + ": leaves of grid '" + grid->getName() + "' carry different attributes");
+        openvdb::points::AttributeHandle<openvdb::Vec3f> ph(leaf->constAttributeArray(posIndex));
+        for (auto idx = leaf->beginIndexAll(); idx; ++idx) {
+            const openvdb::Vec3d voxel = idx.getCoord().asVec3d();
+            const openvdb::Vec3d w = xform.indexToWorld(voxel + openvdb::Vec3d(ph.get(*idx)));
+            set.positions.emplace_back(float(w.x()), float(w.y()), float(w.z()));
+            for (size_t k = 0; k < columns.size(); ++k) {
+                const Column& c = columns[k];
+                const auto& array = leaf->constAttributeArray(c.pos);
+                const int n = comps(c);
+                if (isFloat(c)) {
+                    fcols[k].resize(fcols[k].size() + n);
+                    float* o = &fcols[k][fcols[k].size() - n];
+                    if (c.kind == Column::F) copyValues<float>(array, *idx, c.stride, o);
+                    else if (c.kind == Column::D) {
+                        std::vector<double> t(n);
+                        copyValues<double>(array, *idx, c.stride, t.data());
+                        for (int j = 0; j < n; ++j) o[j] = float(t[j]);
+                    } else if (c.kind == Column::F3) {
+                        std::vector<openvdb::Vec3f> t(c.stride);
+                        copyValues<openvdb::Vec3f>(array, *idx, c.stride, t.data());
+                        for (int j = 0; j < n; ++j) o[j] = t[j / 3][j % 3];
+                    } else {
+                        std::vector<openvdb::Vec3d> t(c.stride);
+                        copyValues<openvdb::Vec3d>(array, *idx, c.stride, t.data());
+                        for (int j = 0; j < n; ++j) o[j] = float(t[j / 3][j % 3]);
+                    }
+                } else {
+                    icols[k].resize(icols[k].size() + n);
+                    int64_t* o = &icols[k][icols[k].size() - n];
+                    if (c.kind == Column::I64) copyValues<int64_t>(array, *idx, c.stride, o);
+                    else if (c.kind == Column::I32) {
+                        std::vector<int32_t> t(n);
+                        copyValues<int32_t>(array, *idx, c.stride, t.data());
+                        for (int j = 0; j < n; ++j) o[j] = t[j];
+                    } else {
+                        std::vector<openvdb::Vec3i> t(c.stride);
+                        copyValues<openvdb::Vec3i>(array, *idx, c.stride, t.data());
+                        for (int j = 0; j < n; ++j) o[j] = t[j / 3][j % 3];
+                    }
+                }
+            }
+        }
+    }
+    for (size_t k = 0; k < columns.size(); ++k) {
+        if (isFloat(columns[k])) set.addFloat(columns[k].name, comps(columns[k]), std::move(fcols[k]));
+        else set.addInt(columns[k].name, comps(columns[k]), std::move(icols[k]));
+    }
+    if (detail) {
+        *detail = "grid '" + grid->getName() + "', voxel " + std::to_string(xform.voxelSize()[0]);
+        if (!skipped.empty()) *detail += ", skipped attributes: " + skipped;
+    }
+    return set;
+}
+
+void writeVdbPoints(const ParticleSet& ps, const std::string& path, bool compress)
+{
+    namespace vdb = openvdb;
+    namespace points = openvdb::points;
+    using VdbVec3f = openvdb::Vec3f;
+    ps.validate();
+    vdb::initialize();
+    std::vector<VdbVec3f> positions(ps.size());
+    std::memcpy(positions.data(), ps.positions.data(), ps.size() * sizeof(VdbVec3f));
+    points::PointAttributeVector<VdbVec3f> wrapper(positions);
+    // About 8 points per voxel, rounded down to a power of two (see the header comment).
+    double voxel = ps.size() > 1 ? double(points::computeVoxelSize(wrapper, 8)) : 1.0;
+    if (!(voxel > 0) || !std::isfinite(voxel)) voxel = 1.0;
+    voxel = std::ldexp(1.0, int(std::floor(std::log2(voxel))));
+    // Keep index coordinates inside VDB's int32 range.
+    const BBox3f box = ps.bbox();
+    for (int a = 0; a < 3 && !box.empty(); ++a)
+        while (std::max(std::fabs(box.min[a]), std::fabs(box.max[a])) / voxel > 1e9) voxel *= 2;
+    auto xform = vdb::math::Transform::createLinearTransform(voxel);
+    auto indexGrid = vdb::tools::createPointIndexGrid<vdb::tools::PointIndexGrid>(wrapper, *xform);
+    auto grid = points::createPointDataGrid<points::NullCodec, points::PointDataGrid>(*indexGrid, wrapper, *xform);
+    for (const Attribute& a : ps.attributes) {
+        if (a.name == "P") throw OutputError(path + ": attribute named \"P\" clashes with VDB positions");
+        if (a.type == AttributeType::Float && a.components == 3) {
+            std::vector<VdbVec3f> v(ps.size());
+            std::memcpy(v.data(), a.floats.data(), v.size() * sizeof(VdbVec3f));
+            points::appendAttribute<VdbVec3f>(grid->tree(), a.name);
+            points::populateAttribute(grid->tree(), indexGrid->tree(), a.name, points::PointAttributeVector<VdbVec3f>(v));
+        } else if (a.type == AttributeType::Float) {
+            points::appendAttribute<float>(grid->tree(), a.name, 0.f, vdb::Index(a.components));
+            points::populateAttribute(grid->tree(), indexGrid->tree(), a.name,
+                                      points::PointAttributeVector<float>(a.floats, vdb::Index(a.components)), vdb::Index(a.components));
+        } else {
+            points::appendAttribute<int64_t>(grid->tree(), a.name, int64_t(0), vdb::Index(a.components));
+            points::populateAttribute(grid->tree(), indexGrid->tree(), a.name,
+                                      points::PointAttributeVector<int64_t>(a.ints, vdb::Index(a.components)), vdb::Index(a.components));
+        }
+    }
+    grid->setName("points");
+    grid->insertMeta("fluidsurf_particle_count", vdb::Int64Metadata(int64_t(ps.size())));
+    io::AtomicFile out(path);
+    try {
+        openvdb::io::File file(out.tempPath());
+        file.setCompression(compress ? openvdb::io::COMPRESS_BLOSC : openvdb::io::COMPRESS_NONE);
+        file.write(vdb::GridPtrVec{grid});
+        file.close();
+    } catch (const std::exception& e) {
+        throw OutputError(path + ": cannot write VDB: " + e.what());
+    }
+    out.commit();
+}
+
+} // namespace io_internal
+} // namespace fluidsurf

@@ -1,0 +1,54 @@
+// XyzIO.cc - raw .xyz: little-endian float32 x y z triples, no header (DualSPHysics exports,
+// splashsurf). A text file named .xyz (the other common meaning of the extension) is
+// recognised and handed to the CSV reader instead of being misread as binary.
+#include "io/ByteReader.h"
+#include "io/Formats.h"
+#include "io/TextParse.h"
+
+#include <fluidsurf/Error.h>
+
+namespace fluidsurf {
+namespace io_internal {
+
+namespace {
+bool looksLikeNumericText(const uint8_t* d, size_t size)
+{
+    const size_t n = std::min<size_t>(size, 4096);
+    if (n == 0) return false;
+    for (size_t i = 0; i < n; ++i) {
+        const uint8_t c = d[i];
+        if (!(isSpace(c) || std::isdigit(c) || c == '.' || c == '-' || c == '+' || c == 'e' ||
+              c == 'E' || c == ',' || c == ';' || c == '#'))
+            return false;
+    }
+    return true;
+}
+} // namespace
+
+ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+{
+    if (looksLikeNumericText(data, size)) {
+        ParticleSet set = readCsv(data, size, src, detail);
+        if (detail) *detail = "ASCII text (" + *detail + ")";
+        return set;
+    }
+    ByteReader in(data, size, src);
+    if (size % 12 != 0)
+        in.failAt(size - size % 12, "raw .xyz size " + std::to_string(size) +
+                                        " is not a multiple of 12 bytes (3 float32 per particle): truncated or not raw float32 xyz");
+    ParticleSet set;
+    set.positions.resize(size / 12);
+    if (size) std::memcpy(set.positions.data(), data, size);  // little-endian host
+    if (detail) *detail = "raw float32 little-endian";
+    return set;
+}
+
+Bytes encodeXyz(const ParticleSet& ps)
+{
+    Bytes out(ps.size() * 12);
+    if (!out.empty()) std::memcpy(out.data(), ps.positions.data(), out.size());
+    return out;
+}
+
+} // namespace io_internal
+} // namespace fluidsurf

@@ -1,0 +1,52 @@
+// Bench.h - benchmark cases of fluidsurf_bench and the timing helpers they share.
+#pragma once
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+namespace bench {
+
+struct ReadBenchOptions
+{
+    size_t count = 2000000;
+    int repeat = 7;
+    std::string dir = "/tmp";
+    std::string shared = "../shared/data";
+    bool json = false;
+};
+
+int runReadBench(const ReadBenchOptions& options);
+
+inline double median(std::vector<double> v)
+{
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+}
+
+template <typename F>
+double seconds(F&& f)
+{
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Peak resident set size of this process so far, in MiB (VmHWM).
+inline double peakRssMiB()
+{
+    FILE* f = std::fopen("/proc/self/status", "r");
+    if (!f) return 0;
+    char line[256];
+    double kb = 0;
+    while (std::fgets(line, sizeof(line), f))
+        if (std::sscanf(line, "VmHWM: %lf kB", &kb) == 1) break;
+    std::fclose(f);
+    return kb / 1024.0;
+}
+
+} // namespace bench
+} // namespace fluidsurf

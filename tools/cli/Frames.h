@@ -1,0 +1,25 @@
+// Frames.h - turning a path (or pattern) and --frames into the list of frame numbers to process.
+#pragma once
+
+#include <fluidsurf/FramePattern.h>
+
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+namespace cli {
+
+struct FrameJob
+{
+    std::string input, output;
+    int frame = -1;  ///< -1 for a single file
+};
+
+/// Frame jobs for an input (pattern or file) and an optional output pattern. A sequence
+/// without --frames takes the frames that exist on disk. ValueError when nothing matches or
+/// the output is not a pattern while the input is.
+std::vector<FrameJob> planFrames(const std::string& input, const std::string& output,
+                                 const std::string& range);
+
+} // namespace cli
+} // namespace fluidsurf

@@ -1,0 +1,49 @@
+// main.cc - the fluidsurf command line: parse, dispatch to a subcommand, turn exceptions into
+// one message on stderr and a non-zero exit code.
+#include "Commands.h"
+
+#include <fluidsurf/Error.h>
+#include <fluidsurf/Version.h>
+
+#include <iostream>
+
+int main(int argc, char** argv)
+{
+    using namespace fluidsurf;
+    CLI::App app{"fluidsurf " FLUIDSURF_VERSION_STRING
+                 " - SPH particle frames to OpenVDB level sets and triangle meshes"};
+    app.set_version_flag("--version", std::string("fluidsurf ") + FLUIDSURF_VERSION_STRING);
+    app.require_subcommand(1);
+    app.footer(R"(Examples:
+  fluidsurf info frame.bgeo                      what a particle file holds, and its radius
+  fluidsurf convert frame.vtk frame.vdb          particles to OpenVDB points
+  fluidsurf convert 'sim/f_{:04}.bgeo' 'out/f_{:04}.ply' --frames 1-100
+  fluidsurf generate drop --count 100000 -o drop.bgeo
+
+Frame sequences: {:04}, #### or %04d in a file name; --frames A-B picks frames,
+otherwise every matching file on disk is used.
+Run 'fluidsurf COMMAND --help' for the options of a command.)");
+    const cli::Runner info = cli::addInfoCommand(app);
+    const cli::Runner convert = cli::addConvertCommand(app);
+    const cli::Runner generate = cli::addGenerateCommand(app);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e);
+    }
+    try {
+        if (app.got_subcommand("info")) return info();
+        if (app.got_subcommand("convert")) return convert();
+        if (app.got_subcommand("generate")) return generate();
+    } catch (const fluidsurf::Error& e) {
+        std::cerr << "fluidsurf: error: " << e.what() << "\n";
+        return 1;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "fluidsurf: error: out of memory\n";
+        return 1;
+    } catch (const std::exception& e) {
+        std::cerr << "fluidsurf: error: " << e.what() << "\n";
+        return 1;
+    }
+    return 2;
+}
