@@ -56,7 +56,7 @@ Runner addConvertCommand(CLI::App& app)
         }
         bar.finish();
         const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (!o->quiet || jobs.size() > 1)
+        if (jobs.size() > 1)
             std::printf("converted %zu frame(s), %zu particles in %.2f s\n", jobs.size(), total, secs);
         return 0;
     };

@@ -62,7 +62,7 @@ void printInfo(const std::string& path, const InfoOptions& o)
     if (est.medianNearest > 0) {
         std::printf("  spacing     median nearest-neighbour distance %.6g (%s particles measured)\n",
                     est.medianNearest, grouped(est.sampled).c_str());
-        std::printf("  radius r    %.6g (estimate = spacing / 2; pass the simulator's radius with -r when known)\n",
+        std::printf("  radius r    %.6g (estimate: spacing / 2; prefer the simulator's radius when known)\n",
                     est.radius);
         if (est.isolated) std::printf("  isolated    %s sampled particles have no neighbour nearby\n", grouped(est.isolated).c_str());
     } else {

@@ -28,8 +28,15 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
     const cli::Runner generate = cli::addGenerateCommand(app);
     try {
         app.parse(argc, argv);
-    } catch (const CLI::ParseError& e) {
+    } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::CallForVersion& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        std::cerr << "fluidsurf: error: " << e.what() << " (see 'fluidsurf --help')\n";
+        return e.get_exit_code() ? e.get_exit_code() : 2;
     }
     try {
         if (app.got_subcommand("info")) return info();

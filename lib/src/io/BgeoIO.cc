@@ -67,7 +67,7 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
         if (d.size < 1 || d.size > 16)
             in.fail("attribute '" + d.name + "' has invalid size " + std::to_string(d.size));
         if (d.type == kIndex || d.type == kString) {
-            // Default index then the string table; kept as the integer index per point.
+            // A string table follows; each point stores an index into it, kept as an int.
             const int32_t strings = in.read<int32_t>(true, "string count");
             if (strings < 0) in.fail("negative string count");
             in.checkedCount(uint64_t(strings), 2, "strings");

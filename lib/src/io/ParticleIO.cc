@@ -42,7 +42,7 @@ ParticleFormat formatFromContent(const uint8_t* d, size_t n)
     if (starts("BgeoV") || isGzip(d, n)) return ParticleFormat::Bgeo;  // gzip: BGEO is our only gzip format
     if (starts("ply\n") || starts("ply\r")) return ParticleFormat::Ply;
     if (starts("\x93NUMPY")) return ParticleFormat::Npy;
-    if (n >= 4 && d[0] == 0x20 && d[1] == 0xBD && d[2] == 0xB3 && d[3] == 0x56) return ParticleFormat::VdbPoints;
+    if (n >= 4 && d[0] == 0x20 && d[1] == 0x42 && d[2] == 0x44 && d[3] == 0x56) return ParticleFormat::VdbPoints;
     if (starts("<?xml") || starts("<VTKFile")) return ParticleFormat::VtkXml;
     return ParticleFormat::Unknown;
 }
@@ -72,7 +72,11 @@ bool canWriteParticles(ParticleFormat f)
 ParticleSet readParticlesFromMemory(const uint8_t* data, size_t size, ParticleFormat format,
                                     const std::string& source, const ReadOptions& options, ReadInfo* info)
 {
-    if (size == 0) throw InputError(source + ": file is empty");
+    if (size == 0) {
+        // A headerless .xyz holding no particles is an empty file.
+        if (format == ParticleFormat::Xyz && options.allowEmpty) return ParticleSet();
+        throw InputError(source + ": file is empty" + (format == ParticleFormat::Xyz ? " (no particles)" : ""));
+    }
     const ParticleFormat content = formatFromContent(data, size);
     if (content != ParticleFormat::Unknown && content != format &&
         !(format == ParticleFormat::VtkXml && content == ParticleFormat::VtkXml))

@@ -57,7 +57,7 @@ void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx
 ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
 {
     openvdb::initialize();
-    if (size < 8 || !(data[0] == 0x20 && data[1] == 0xBD && data[2] == 0xB3 && data[3] == 0x56))
+    if (size < 8 || !(data[0] == 0x20 && data[1] == 0x42 && data[2] == 0x44 && data[3] == 0x56))
         throw InputError(src + ": not an OpenVDB file (missing VDB magic) (at byte 0)");
     openvdb::GridPtrVecPtr grids;
     try {
@@ -179,6 +179,11 @@ void writeVdbPoints(const ParticleSet& ps, const std::string& path, bool compres
     namespace points = openvdb::points;
     using VdbVec3f = openvdb::Vec3f;
     ps.validate();
+    size_t bad = 0;
+    for (const Vec3f& p : ps.positions) bad += !p.isFinite();
+    if (bad)
+        throw OutputError(path + ": " + std::to_string(bad) +
+                          " particle(s) have NaN/Inf positions, which VDB points cannot store");
     vdb::initialize();
     std::vector<VdbVec3f> positions(ps.size());
     std::memcpy(positions.data(), ps.positions.data(), ps.size() * sizeof(VdbVec3f));

@@ -165,6 +165,11 @@ private:
         }
         if (!haveRoot) in.failAt(0, "not a VTK XML file (no <VTKFile> root)");
         if (mPieceCounts.empty()) in.fail("no <Piece> element");
+        // VTK always closes the root; its absence means the file was cut short.
+        const size_t tail = std::min<size_t>(in.size(), 256);
+        const std::string end(reinterpret_cast<const char*>(in.data() + in.size() - tail), tail);
+        if (end.find("</VTKFile>") == std::string::npos)
+            in.failAt(in.size(), "file ends without </VTKFile> (truncated file?)");
     }
 
     int components(const ArrayInfo& a)

@@ -1,0 +1,81 @@
+// TestData.h - helpers shared by the tests: the shared real frames (skipped when absent), temp
+// folders, and a byte builder for writing test files by hand, independent of the library's own
+// encoders.
+#pragma once
+
+#include <fluidsurf/Error.h>
+#include <fluidsurf/io/ParticleIO.h>
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+
+namespace fluidsurf {
+namespace test {
+
+/// ../shared/data, or "" when it is not there (a user's fresh clone).
+std::string sharedData();
+
+#define FLUIDSURF_REQUIRE_SHARED_DATA()                                                            \
+    do {                                                                                           \
+        if (::fluidsurf::test::sharedData().empty())                                               \
+            GTEST_SKIP() << "../shared/data is absent: real-frame test skipped";                  \
+    } while (0)
+
+/// A fresh folder under /tmp, removed with its content on destruction.
+class TempDir
+{
+public:
+    TempDir();
+    ~TempDir();
+    std::string path(const std::string& name) const { return mPath + "/" + name; }
+    const std::string& path() const { return mPath; }
+
+private:
+    std::string mPath;
+};
+
+void writeFile(const std::string& path, const std::string& bytes);
+std::string readFileBytes(const std::string& path);
+bool fileExists(const std::string& path);
+
+/// Append-only byte builder with explicit endianness.
+struct ByteBuilder
+{
+    std::string s;
+    template <typename T>
+    ByteBuilder& be(T v)
+    {
+        char b[sizeof(T)];
+        std::memcpy(b, &v, sizeof(T));
+        for (size_t i = 0; i < sizeof(T); ++i) s += b[sizeof(T) - 1 - i];
+        return *this;
+    }
+    template <typename T>
+    ByteBuilder& le(T v)
+    {
+        char b[sizeof(T)];
+        std::memcpy(b, &v, sizeof(T));
+        s.append(b, sizeof(T));
+        return *this;
+    }
+    ByteBuilder& text(const std::string& t)
+    {
+        s += t;
+        return *this;
+    }
+};
+
+std::string gzipBytes(const std::string& data);
+std::string zlibBytes(const std::string& data);
+std::string base64(const std::string& data);
+
+/// Read bytes as the given format through the public API.
+ParticleSet readBytes(const std::string& bytes, io::ParticleFormat format, const io::ReadOptions& o = {});
+
+/// The InputError message of reading bytes, or "" if it read fine.
+std::string readError(const std::string& bytes, io::ParticleFormat format);
+
+} // namespace test
+} // namespace fluidsurf

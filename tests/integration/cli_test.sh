@@ -1,0 +1,128 @@
+#!/usr/bin/env bash
+# cli_test.sh FLUIDSURF_BINARY SHARED_DATA - end-to-end checks of the fluidsurf command line:
+# help/version, info on the real frames, conversions, sequences, and bad input (exit code,
+# one message, no output file). Positions are also checked against an independent NumPy parse
+# of the original files when /usr/bin/python3 has numpy.
+set -u
+BIN=$1
+SHARED=${2:-../shared/data}
+T=$(mktemp -d /tmp/fluidsurf_cli_XXXXXX)
+trap 'rm -rf "$T"' EXIT
+pass=0; fail=0
+ok()   { pass=$((pass + 1)); }
+bad()  { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
+check() { local what=$1; shift; if "$@"; then ok; else bad "$what"; fi; }
+# expect_error WHAT PATTERN CMD...: non-zero exit, one 'fluidsurf: error:' line matching PATTERN
+expect_error() {
+    local what=$1 pattern=$2; shift 2
+    local out rc
+    out=$("$@" 2>&1 >/dev/null); rc=$?
+    if [ $rc -eq 0 ]; then bad "$what: exit code 0"; return; fi
+    if ! grep -q -- "$pattern" <<<"$out"; then bad "$what: message '$out' lacks '$pattern'"; return; fi
+    if [ "$(grep -c 'fluidsurf: error:' <<<"$out")" -ne 1 ]; then bad "$what: not exactly one error line: $out"; return; fi
+    ok
+}
+
+# --- help and version ---------------------------------------------------------------------
+check "--help shows examples" bash -c "'$BIN' --help | grep -q 'Examples:'"
+check "--version" bash -c "'$BIN' --version | grep -Eq '^fluidsurf [0-9]+\.[0-9]+\.[0-9]+'"
+check "convert --help" bash -c "'$BIN' convert --help | grep -q -- '--frames'"
+expect_error "no subcommand" "" "$BIN"
+
+# --- generate ------------------------------------------------------------------------------
+for scene in single block ball slab drop; do
+    check "generate $scene" "$BIN" generate $scene -n 2000 -r 0.01 -o "$T/$scene.bgeo"
+done
+check "generate is deterministic" bash -c "'$BIN' generate drop -n 3000 -o '$T/d1.ply' >/dev/null && '$BIN' generate drop -n 3000 -o '$T/d2.ply' >/dev/null && cmp -s '$T/d1.ply' '$T/d2.ply'"
+
+# --- info on the real frames --------------------------------------------------------------
+if [ -d "$SHARED/real" ]; then
+    declare -A COUNTS=(
+        [double_dam_break_frame_26_4732_particles.vtk]=4,732 [dam_break_frame_9_6859_particles.bgeo]=6,859
+        [dam_break_frame_23_24389_particles.bgeo]=24,389 [hilbert_46843_particles.bgeo]=46,843
+        [bunny_frame_14_7705_particles.vtk]=7,706 [cube_2366_particles.vtk]=2,366
+        [free_particles_1000_particles.vtk]=1,000 [ParticleData_Random_1000.vtk]=1,000
+        [fluid_250_particles.vtu]=250 [fluid_encoded_250_particles.vtu]=250
+        [splishsplash_sphere_12394_particles.bgeo]=12,394 [splishsplash_particle_grid_400_particles.bgeo]=400)
+    for f in "${!COUNTS[@]}"; do
+        out=$("$BIN" info "$SHARED/real/$f" 2>&1)
+        check "info count $f" grep -q "particles   ${COUNTS[$f]}\$" <<<"$out"
+        check "info radius estimate $f" grep -q "radius r    .*estimate" <<<"$out"
+    done
+    check "info velocity attribute" bash -c "'$BIN' info '$SHARED/real/dam_break_frame_9_6859_particles.bgeo' | grep -q 'velocity *float3 *\[velocity\]'"
+    check "info density attribute" bash -c "'$BIN' info '$SHARED/real/dam_break_frame_9_6859_particles.bgeo' | grep -q 'density *float *\[density\]'"
+    check "info pscale attribute" bash -c "'$BIN' info '$SHARED/real/splishsplash_sphere_12394_particles.bgeo' | grep -q 'pscale *float *\[radius\]'"
+    check "info id attribute" bash -c "'$BIN' info '$SHARED/real/bunny_frame_14_7705_particles.vtk' | grep -q 'id *int *\[id\]'"
+
+    # conversions keep the count; info reads every written format
+    for ext in vdb bgeo bgeo.gz ply xyz vtk; do
+        check "convert hilbert -> $ext" "$BIN" convert -q "$SHARED/real/hilbert_46843_particles.bgeo" "$T/h.$ext"
+        check "info of written .$ext" bash -c "'$BIN' info --no-spacing '$T/h.$ext' | grep -q 'particles   46,843'"
+    done
+
+    # independent check of the readers: Python's standard library parses the original files
+    PY=$(command -v /usr/bin/python3 || command -v python3 || true)
+    if [ -n "$PY" ]; then
+        "$BIN" convert -q "$SHARED/real/bunny_frame_14_7705_particles.vtk" "$T/bunny.xyz"
+        "$BIN" convert -q "$SHARED/real/dam_break_frame_9_6859_particles.bgeo" "$T/dam9.xyz"
+        check "positions equal an independent Python parse" "$PY" - "$SHARED/real" "$T" <<'PYEOF'
+import gzip, struct, sys
+real, tmp = sys.argv[1], sys.argv[2]
+def ours(name):
+    b = open(tmp + "/" + name, "rb").read()
+    return list(struct.unpack("<%dI" % (len(b) // 4), b))
+raw = open(real + "/bunny_frame_14_7705_particles.vtk", "rb").read()
+head = b"POINTS 7706 float\n"
+start = raw.index(head) + len(head)
+vtk = list(struct.unpack(">%dI" % (7706 * 3), raw[start:start + 7706 * 12]))
+assert vtk == ours("bunny.xyz"), "bunny positions differ"
+g = gzip.open(real + "/dam_break_frame_9_6859_particles.bgeo").read()
+n, nattr = struct.unpack(">i", g[9:13])[0], struct.unpack(">i", g[25:29])[0]
+off, per = 41, 4
+for _ in range(nattr):
+    ln = struct.unpack(">H", g[off:off + 2])[0]; off += 2 + ln
+    size = struct.unpack(">h", g[off:off + 2])[0]; off += 6 + 4 * size; per += size
+words = struct.unpack(">%dI" % (n * per), g[off:off + 4 * n * per])
+pts = [w for i in range(n) for w in words[i * per:i * per + 3]]
+assert pts == ours("dam9.xyz"), "bgeo positions differ"
+PYEOF
+    else
+        echo "note: no python3; independent parse check skipped"
+    fi
+else
+    echo "note: $SHARED/real absent; real-frame checks skipped"
+fi
+
+# --- sequences -----------------------------------------------------------------------------
+for i in 1 2 3; do "$BIN" generate slab -n 500 --seed $i -o "$T/seq_000$i.bgeo" >/dev/null; done
+check "convert a sequence with --frames" "$BIN" convert -q "$T/seq_{:04}.bgeo" "$T/out_####.ply" --frames 1-3
+check "sequence outputs exist" test -f "$T/out_0001.ply" -a -f "$T/out_0002.ply" -a -f "$T/out_0003.ply"
+check "sequence without --frames takes the files on disk" bash -c "'$BIN' convert '$T/seq_%04d.bgeo' '$T/x_%04d.xyz' | grep -q 'converted 3 frame'"
+check "info on a pattern" bash -c "[ \$('$BIN' info --no-spacing '$T/seq_####.bgeo' | grep -c 'particles') -eq 3 ]"
+check "no progress bar when piped" bash -c "! '$BIN' convert '$T/seq_{:04}.bgeo' '$T/y_{:04}.xyz' 2>&1 | grep -q \$'\r'"
+expect_error "pattern in, single file out" "must be a pattern" "$BIN" convert "$T/seq_{:04}.bgeo" "$T/single.ply"
+expect_error "missing frame in range" "seq_0004.bgeo: cannot open" "$BIN" convert "$T/seq_{:04}.bgeo" "$T/z_{:04}.ply" --frames 3-4
+expect_error "no matching frames" "no files match" "$BIN" info "$T/none_{:04}.bgeo"
+
+# --- bad input: one message, non-zero exit, no output file -----------------------------------
+"$BIN" generate ball -n 5000 -o "$T/ball.bgeo" >/dev/null
+head -c 3000 "$T/ball.bgeo" > "$T/cut.bgeo"
+expect_error "truncated bgeo" "cut.bgeo" "$BIN" convert "$T/cut.bgeo" "$T/cut_out.ply"
+check "no output after failure" test ! -e "$T/cut_out.ply"
+echo precious > "$T/existing.ply"
+expect_error "failed convert keeps the existing output" "cut.bgeo" "$BIN" convert "$T/cut.bgeo" "$T/existing.ply"
+check "existing output untouched" grep -q precious "$T/existing.ply"
+check "no temporary files left" bash -c "! ls -A '$T' | grep -q tmp"
+expect_error "missing input" "cannot open" "$BIN" info "$T/missing.vtk"
+expect_error "unknown extension" "unknown particle file type" "$BIN" info "$T/ball.stl"
+: > "$T/empty.xyz"
+expect_error "empty file" "empty" "$BIN" convert "$T/empty.xyz" "$T/e.ply"
+printf '1 2 3\nnan 0 0\n' > "$T/nan.csv"
+expect_error "NaN coordinates" "NaN/Inf" "$BIN" convert "$T/nan.csv" "$T/nan.ply"
+check "--drop-nonfinite" bash -c "'$BIN' convert --drop-nonfinite '$T/nan.csv' '$T/nan.ply' | grep -q '1 non-finite dropped'"
+expect_error "unwritable output format" "cannot write particles" "$BIN" convert "$T/ball.bgeo" "$T/ball.csv"
+expect_error "output folder missing" "cannot write into folder" "$BIN" convert "$T/ball.bgeo" "$T/nodir/ball.ply"
+expect_error "bad frame range" "bad frame range" "$BIN" convert "$T/seq_{:04}.bgeo" "$T/q_{:04}.ply" --frames 5-2
+
+echo "cli: $pass passed, $fail failed"
+[ $fail -eq 0 ]

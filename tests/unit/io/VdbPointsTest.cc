@@ -1,0 +1,49 @@
+// OpenVDB points: the file is a real PointDataGrid that OpenVDB itself reads back.
+#include "TestData.h"
+
+#include <openvdb/openvdb.h>
+#include <openvdb/points/PointCount.h>
+#include <openvdb/points/PointDataGrid.h>
+
+using namespace fluidsurf;
+using namespace fluidsurf::test;
+
+TEST(VdbPoints, WrittenGridIsAPointDataGridWithAttributes)
+{
+    TempDir dir;
+    ParticleSet ps;
+    for (int i = 0; i < 1000; ++i) ps.positions.emplace_back(0.01f * i, 0.02f * (i % 10), -0.5f);
+    std::vector<float> rho(1000, 1000.f);
+    ps.addFloat("density", 1, rho);
+    ps.addFloat("v", 3, std::vector<float>(3000, 0.5f));
+    io::writeParticles(ps, dir.path("p.vdb"));
+
+    openvdb::initialize();
+    openvdb::io::File file(dir.path("p.vdb"));
+    file.open();
+    auto grids = file.getGrids();
+    file.close();
+    ASSERT_EQ(grids->size(), 1u);
+    auto grid = openvdb::gridPtrCast<openvdb::points::PointDataGrid>((*grids)[0]);
+    ASSERT_TRUE(grid);
+    EXPECT_EQ(openvdb::points::pointCount(grid->tree()), 1000u);
+    const auto& desc = grid->tree().cbeginLeaf()->attributeSet().descriptor();
+    EXPECT_NE(desc.find("density"), openvdb::points::AttributeSet::INVALID_POS);
+    EXPECT_EQ(desc.type(desc.find("v")).first, "vec3s");
+}
+
+TEST(VdbPoints, LevelSetOnlyFileIsAClearError)
+{
+    TempDir dir;
+    openvdb::initialize();
+    auto grid = openvdb::FloatGrid::create(1.f);
+    grid->setName("surface");
+    openvdb::io::File(dir.path("ls.vdb")).write({grid});
+    try {
+        io::readParticles(dir.path("ls.vdb"));
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("no PointDataGrid"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("surface"), std::string::npos) << e.what();
+    }
+}
