@@ -5,6 +5,7 @@
 // of the float32 world coordinates, the offset keeps all 24 mantissa bits, and converting back
 // in double reproduces the original float exactly. Point order is not part of a VDB (points
 // are bucketed by voxel), so a round trip keeps each particle, not their order.
+#include "io/ByteReader.h"
 #include "io/Formats.h"
 
 #include <fluidsurf/Error.h>
@@ -52,6 +53,56 @@ void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx
     for (int c = 0; c < stride; ++c) out[c] = h.get(idx, openvdb::Index(c));
 }
 
+/// OpenVDB's reader trusts the file: on a truncated or corrupt file it sizes allocations from
+/// whatever bytes it finds (gigabytes seen here). Before handing the bytes over, walk the header
+/// and the grid descriptors ourselves and check every grid's recorded end offset against the real
+/// size. Files without grid offsets (written by io::Stream) only get the header checks.
+void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
+{
+    ByteReader in(data, size, src);
+    in.skip(8, "VDB magic");
+    const uint32_t version = in.read<uint32_t>(false, "file version");
+    if (version < 222 || version > 1000)
+        in.failAt(8, "unsupported VDB file version " + std::to_string(version) + " (222 or newer expected)");
+    in.skip(8, "library version");
+    const bool hasOffsets = *in.take(1, "grid offsets flag") != 0;
+    in.skip(36, "UUID");
+    auto skipString = [&](const char* what) {
+        const int32_t len = in.read<int32_t>(false, what);
+        if (len < 0) in.fail(std::string("negative length of ") + what);
+        in.skip(size_t(len), what);
+    };
+    const int32_t metaCount = in.read<int32_t>(false, "metadata count");
+    if (metaCount < 0 || size_t(metaCount) > in.remaining() / 12) in.fail("corrupt file metadata count");
+    for (int32_t m = 0; m < metaCount; ++m) {
+        skipString("metadata name");
+        skipString("metadata type");
+        skipString("metadata value");
+    }
+    if (!hasOffsets) return;
+    const int32_t grids = in.read<int32_t>(false, "grid count");
+    if (grids < 0 || size_t(grids) > in.remaining() / 36) in.fail("corrupt grid count " + std::to_string(grids));
+    for (int32_t g = 0; g < grids; ++g) {
+        skipString("grid name");
+        skipString("grid type");
+        skipString("grid instance parent");
+        const int64_t gridPos = in.read<int64_t>(false, "grid offset");
+        const int64_t blockPos = in.read<int64_t>(false, "grid block offset");
+        const int64_t endPos = in.read<int64_t>(false, "grid end offset");
+        if (!(gridPos > 0 && gridPos <= blockPos && blockPos <= endPos))
+            in.fail("corrupt grid offsets in descriptor " + std::to_string(g));
+        if (uint64_t(endPos) > size)
+            in.fail("grid " + std::to_string(g) + " ends at byte " + std::to_string(endPos) + " but the file has " +
+                    std::to_string(size) + " bytes (truncated file?)");
+        in.seek(size_t(endPos));
+    }
+}
+
+std::string shortened(const std::string& s)
+{
+    return s.size() > 200 ? s.substr(0, 200) + "..." : s;
+}
+
 } // namespace
 
 ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
@@ -59,14 +110,23 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
     openvdb::initialize();
     if (size < 8 || !(data[0] == 0x20 && data[1] == 0x42 && data[2] == 0x44 && data[3] == 0x56))
         throw InputError(src + ": not an OpenVDB file (missing VDB magic) (at byte 0)");
+    checkVdbStructure(data, size, src);
     openvdb::GridPtrVecPtr grids;
     try {
         MemoryBuf buf(data, size);
         std::istream stream(&buf);
+        // OpenVDB does not check every read; after a short read it would go on with whatever
+        // its variables held and size allocations from them (gigabytes on a truncated file).
+        // Make any short read throw at once instead.
+        stream.exceptions(std::ios::failbit | std::ios::badbit | std::ios::eofbit);
         openvdb::io::Stream vdb(stream);
         grids = vdb.getGrids();
+    } catch (const std::ios_base::failure&) {
+        throw InputError(src + ": VDB data ends early (truncated file?)");
+    } catch (const std::bad_alloc&) {
+        throw InputError(src + ": corrupt VDB (a size field asks for more memory than available)");
     } catch (const std::exception& e) {
-        throw InputError(src + ": cannot read VDB: " + e.what());
+        throw InputError(src + ": cannot read VDB: " + shortened(e.what()));
     }
     openvdb::points::PointDataGrid::Ptr grid;
     std::string names;

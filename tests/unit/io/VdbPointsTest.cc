@@ -47,3 +47,15 @@ TEST(VdbPoints, LevelSetOnlyFileIsAClearError)
         EXPECT_NE(std::string(e.what()).find("surface"), std::string::npos) << e.what();
     }
 }
+
+TEST(VdbPoints, TruncatedFileIsCaughtBeforeOpenVdbReadsIt)
+{
+    // OpenVDB itself allocated gigabytes on such files; the structural pre-check names the cut.
+    TempDir dir;
+    ParticleSet ps;
+    for (int i = 0; i < 500; ++i) ps.positions.emplace_back(0.1f * i, 0.f, 0.f);
+    io::writeParticles(ps, dir.path("p.vdb"));
+    const std::string bytes = readFileBytes(dir.path("p.vdb"));
+    const std::string msg = readError(bytes.substr(0, bytes.size() / 2), io::ParticleFormat::VdbPoints);
+    EXPECT_NE(msg.find("bytes (truncated file?)"), std::string::npos) << msg;
+}
