@@ -72,11 +72,9 @@ bool canWriteParticles(ParticleFormat f)
 ParticleSet readParticlesFromMemory(const uint8_t* data, size_t size, ParticleFormat format,
                                     const std::string& source, const ReadOptions& options, ReadInfo* info)
 {
-    if (size == 0) {
-        // A headerless .xyz holding no particles is an empty file.
-        if (format == ParticleFormat::Xyz && options.allowEmpty) return ParticleSet();
+    // A headerless .xyz holding no particles is an empty file; other formats need a header.
+    if (size == 0 && !(format == ParticleFormat::Xyz && options.allowEmpty))
         throw InputError(source + ": file is empty" + (format == ParticleFormat::Xyz ? " (no particles)" : ""));
-    }
     const ParticleFormat content = formatFromContent(data, size);
     if (content != ParticleFormat::Unknown && content != format &&
         !(format == ParticleFormat::VtkXml && content == ParticleFormat::VtkXml))
