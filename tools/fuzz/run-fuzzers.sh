@@ -6,6 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 SECS=${1:-60}
+command -v clang++ >/dev/null || { echo "run-fuzzers: needs clang (apt-get install clang libclang-rt-14-dev)" >&2; exit 2; }
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFLUIDSURF_FUZZ=ON \
     -DFLUIDSURF_WITH_CUDA=OFF -DFLUIDSURF_BUILD_TESTS=OFF >/dev/null
 cmake --build build-fuzz -j "$(nproc)" >/dev/null
@@ -57,13 +58,14 @@ for fmt in bgeo vtk vtu ply npy xyz vdb; do
         [ -f "$art" ] || continue
         replayed=$((replayed + 1))
         cp "$art" /tmp/fluidsurf_replay.vdb
-        msg=$(timeout 20 ./build/fluidsurf info --no-spacing /tmp/fluidsurf_replay.vdb 2>&1 >/dev/null); rc=$?
+        rc=0
+        msg=$(timeout 20 ./build/fluidsurf info --no-spacing /tmp/fluidsurf_replay.vdb 2>&1 >/dev/null) || rc=$?
         if [ $rc -ne 1 ] || [ "$(grep -c 'fluidsurf: error:' <<<"$msg")" -ne 1 ]; then
             echo "  release CLI failed on $art (rc $rc): $msg"; real=$((real + 1))
         fi
     done
     rm -f /tmp/fluidsurf_replay.vdb
-    echo "fuzz_vdb: $(grep -Eo 'exec/s: [0-9]+' "$log" | tail -1), $replayed ASan reports replayed, $real fail the release build"
+    echo "fuzz_vdb: $(grep -Eo '^#[0-9]+' "$log" | tail -1) runs in ${SECS}s, $replayed ASan reports replayed, $real fail the release build"
     [ $real -eq 0 ] || status=1
 done
 exit $status

@@ -26,7 +26,7 @@ ParticleFormat formatFromPath(const std::string& path)
     const std::string p = lower(path);
     if (endsWith(p, ".vtk")) return ParticleFormat::VtkLegacy;
     if (endsWith(p, ".vtu") || endsWith(p, ".vtp")) return ParticleFormat::VtkXml;
-    if (endsWith(p, ".bgeo") || endsWith(p, ".bgeo.gz") || endsWith(p, ".bgeogz")) return ParticleFormat::Bgeo;
+    if (endsWith(p, ".bgeo") || endsWith(p, ".bgeo.gz")) return ParticleFormat::Bgeo;
     if (endsWith(p, ".ply")) return ParticleFormat::Ply;
     if (endsWith(p, ".xyz")) return ParticleFormat::Xyz;
     if (endsWith(p, ".csv") || endsWith(p, ".txt")) return ParticleFormat::Csv;
@@ -148,7 +148,7 @@ void writeParticles(const ParticleSet& particles, const std::string& path, const
     case ParticleFormat::Bgeo: {
         bytes = encodeBgeo(particles);
         const std::string p = lower(path);
-        if (endsWith(p, ".gz") || endsWith(p, "gz")) bytes = gzipCompress(bytes.data(), bytes.size());
+        if (endsWith(p, ".gz")) bytes = gzipCompress(bytes.data(), bytes.size());
         break;
     }
     case ParticleFormat::Ply: bytes = encodePly(particles); break;

@@ -53,10 +53,13 @@ void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx
     for (int c = 0; c < stride; ++c) out[c] = h.get(idx, openvdb::Index(c));
 }
 
-/// OpenVDB's reader trusts the file: on a truncated or corrupt file it sizes allocations from
-/// whatever bytes it finds (gigabytes seen here). Before handing the bytes over, walk the header
-/// and the grid descriptors ourselves and check every grid's recorded end offset against the real
-/// size. Files without grid offsets (written by io::Stream) only get the header checks.
+/// OpenVDB's reader trusts the file: on a truncated file it sizes allocations from whatever
+/// bytes it finds (gigabytes seen here). Before handing the bytes over, walk the header and the
+/// grid descriptors ourselves and check every grid's recorded end offset against the real size.
+/// Files without grid offsets (written by io::Stream) only get the header checks.
+/// Known limit: corruption *inside* a grid's payload (metadata lengths, tile counts) still
+/// reaches OpenVDB 10.0, which fuzzing showed can then allocate gigabytes or loop for minutes;
+/// closing that needs a reader of our own for the grid topology.
 void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
 {
     ByteReader in(data, size, src);
@@ -115,9 +118,9 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
     try {
         MemoryBuf buf(data, size);
         std::istream stream(&buf);
-        // OpenVDB does not check every read; after a short read it would go on with whatever
-        // its variables held and size allocations from them (gigabytes on a truncated file).
-        // Make any short read throw at once instead.
+        // Make short reads throw. This covers only the reads io::Stream does on this stream (the
+        // header); it hands the grids to an internal io::File with a stream of its own, which is
+        // why checkVdbStructure() runs first.
         stream.exceptions(std::ios::failbit | std::ios::badbit | std::ios::eofbit);
         openvdb::io::Stream vdb(stream);
         grids = vdb.getGrids();

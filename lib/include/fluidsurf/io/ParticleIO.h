@@ -23,7 +23,7 @@ namespace io {
 
 enum class ParticleFormat { Unknown, VtkLegacy, VtkXml, Bgeo, Ply, Xyz, Csv, Npy, VdbPoints };
 
-/// Format implied by the file name (case-insensitive, ".bgeo.gz" and ".bgeo.sc"-less).
+/// Format implied by the file name (case-insensitive; ".bgeo.gz" is BGEO).
 ParticleFormat formatFromPath(const std::string& path);
 /// Format recognised from the first bytes of the data (Unknown for headerless formats).
 ParticleFormat formatFromContent(const uint8_t* data, size_t size);
