@@ -61,7 +61,7 @@ public:
     {
         if (n > remaining())
             fail(std::string("file ends while reading ") + what + ": needs " + std::to_string(n) +
-                 " bytes, " + std::to_string(remaining()) + " left (truncated file?)");
+                 " bytes, " + std::to_string(remaining()) + " left (truncated or corrupt file?)");
     }
 
     /// count items of bytesPerItem each must fit in what is left; returns count as size_t.

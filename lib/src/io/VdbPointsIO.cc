@@ -57,9 +57,9 @@ void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx
 /// bytes it finds (gigabytes seen here). Before handing the bytes over, walk the header and the
 /// grid descriptors ourselves and check every grid's recorded end offset against the real size.
 /// Files without grid offsets (written by io::Stream) only get the header checks.
-/// Known limit: corruption *inside* a grid's payload (metadata lengths, tile counts) still
-/// reaches OpenVDB 10.0, which fuzzing showed can then allocate gigabytes or loop for minutes;
-/// closing that needs a reader of our own for the grid topology.
+/// Each grid's metadata and transform type are walked too (bounded by the grid's end offset).
+/// Known limit: corruption in the tree topology (e.g. tile counts) still reaches OpenVDB 10.0,
+/// which fuzzing showed can then loop for minutes; closing that needs our own topology reader.
 void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
 {
     ByteReader in(data, size, src);
@@ -75,19 +75,29 @@ void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
         if (len < 0) in.fail(std::string("negative length of ") + what);
         in.skip(size_t(len), what);
     };
-    const int32_t metaCount = in.read<int32_t>(false, "metadata count");
-    if (metaCount < 0 || size_t(metaCount) > in.remaining() / 12) in.fail("corrupt file metadata count");
-    for (int32_t m = 0; m < metaCount; ++m) {
-        skipString("metadata name");
-        skipString("metadata type");
-        skipString("metadata value");
-    }
+    // A MetaMap: count, then (name, type name, value) length-prefixed strings; names non-empty.
+    auto skipMetaMap = [&](const char* what) {
+        const int32_t count = in.read<int32_t>(false, what);
+        if (count < 0 || size_t(count) > in.remaining() / 12)
+            in.fail(std::string("corrupt ") + what + " " + std::to_string(count));
+        for (int32_t m = 0; m < count; ++m) {
+            const size_t at = in.offset();
+            if (in.read<int32_t>(false, "metadata name length") <= 0) in.failAt(at, "empty or negative metadata name length");
+            in.seek(at);
+            skipString("metadata name");
+            skipString("metadata type");
+            skipString("metadata value");
+        }
+    };
+    skipMetaMap("file metadata count");
     if (!hasOffsets) return;
     const int32_t grids = in.read<int32_t>(false, "grid count");
     if (grids < 0 || size_t(grids) > in.remaining() / 36) in.fail("corrupt grid count " + std::to_string(grids));
     for (int32_t g = 0; g < grids; ++g) {
         skipString("grid name");
+        const size_t typeAt = in.offset() + 4;
         skipString("grid type");
+        const std::string gridType(reinterpret_cast<const char*>(data + typeAt), in.offset() - typeAt);
         skipString("grid instance parent");
         const int64_t gridPos = in.read<int64_t>(false, "grid offset");
         const int64_t blockPos = in.read<int64_t>(false, "grid block offset");
@@ -97,7 +107,40 @@ void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
         if (uint64_t(endPos) > size)
             in.fail("grid " + std::to_string(g) + " ends at byte " + std::to_string(endPos) + " but the file has " +
                     std::to_string(size) + " bytes (truncated file?)");
-        in.seek(size_t(endPos));
+        const size_t next = in.offset();
+        // The grid itself, bounded by its end: compression flags, grid metadata, transform type.
+        ByteReader grid(data, size_t(endPos), src);
+        grid.seek(size_t(gridPos));
+        std::swap(in, grid);
+        in.skip(4, "grid compression flags");
+        skipMetaMap("grid metadata count");
+        const int32_t mapLen = in.read<int32_t>(false, "transform type length");
+        if (mapLen <= 0 || mapLen > 64) in.fail("corrupt transform type length " + std::to_string(mapLen));
+        const std::string map(reinterpret_cast<const char*>(in.take(size_t(mapLen), "transform type")), size_t(mapLen));
+        if (map.size() < 4 || map.compare(map.size() - 3, 3, "Map") != 0)
+            in.fail("corrupt transform type '" + map.substr(0, 40) + "'");
+        // Point grids: bound the root's tile and child counts by the bytes the grid holds (a
+        // corrupt count makes OpenVDB loop for minutes). Map sizes are those of Maps.h read().
+        static const std::pair<const char*, size_t> kMapBytes[] = {
+            {"UniformScaleMap", 120}, {"ScaleMap", 120}, {"UniformScaleTranslateMap", 144},
+            {"ScaleTranslateMap", 144}, {"TranslationMap", 24}, {"AffineMap", 128}, {"UnitaryMap", 128}};
+        size_t mapBytes = 0;
+        for (const auto& [name, bytes] : kMapBytes)
+            if (map == name) mapBytes = bytes;
+        if (mapBytes && gridType == "Tree_ptdataidx32_5_4_3") {
+            in.skip(mapBytes, "transform");
+            const int32_t buffers = in.read<int32_t>(false, "tree buffer count");
+            if (buffers != 1) in.fail("corrupt tree buffer count " + std::to_string(buffers));
+            in.skip(4, "root background");
+            const uint64_t tiles = in.read<uint32_t>(false, "root tile count");
+            const uint64_t children = in.read<uint32_t>(false, "root child count");
+            // a tile is 17 bytes; a child at least its origin and two 32^3-bit masks
+            if (tiles * 17 + children * (12 + 2 * 4096) > in.remaining())
+                in.fail("corrupt root node: " + std::to_string(tiles) + " tiles and " + std::to_string(children) +
+                        " children do not fit in the grid");
+        }
+        std::swap(in, grid);
+        in.seek(next);
     }
 }
 

@@ -59,3 +59,42 @@ TEST(VdbPoints, TruncatedFileIsCaughtBeforeOpenVdbReadsIt)
     const std::string msg = readError(bytes.substr(0, bytes.size() / 2), io::ParticleFormat::VdbPoints);
     EXPECT_NE(msg.find("bytes (truncated file?)"), std::string::npos) << msg;
 }
+
+namespace {
+std::string writtenVdb(TempDir& dir)
+{
+    ParticleSet ps;
+    for (int i = 0; i < 500; ++i) ps.positions.emplace_back(0.1f * i, 0.f, 0.f);
+    io::writeParticles(ps, dir.path("p.vdb"));
+    return readFileBytes(dir.path("p.vdb"));
+}
+void putLE32(std::string& s, size_t at, uint32_t v) { std::memcpy(&s[at], &v, 4); }
+} // namespace
+
+TEST(VdbPoints, CorruptGridMetadataLengthIsCaughtBeforeOpenVdb)
+{
+    // OpenVDB sized a multi-gigabyte string from such a field (found by fuzz_vdb).
+    TempDir dir;
+    std::string bytes = writtenVdb(dir);
+    const size_t name = bytes.find("file_bbox_max");
+    ASSERT_NE(name, std::string::npos);
+    putLE32(bytes, name - 4, 0x7ffffff0u);
+    const std::string msg = readError(bytes, io::ParticleFormat::VdbPoints);
+    EXPECT_NE(msg.find("metadata name"), std::string::npos) << msg;
+}
+
+TEST(VdbPoints, CorruptRootTileCountIsCaughtBeforeOpenVdb)
+{
+    // OpenVDB looped for minutes on a huge root tile count (found by fuzz_vdb).
+    TempDir dir;
+    std::string bytes = writtenVdb(dir);
+    const size_t map = bytes.find("UniformScaleMap");
+    ASSERT_NE(map, std::string::npos);
+    const size_t tree = map + 15 + 120;  // map name, then the map's 5 Vec3d
+    uint32_t buffers;
+    std::memcpy(&buffers, &bytes[tree], 4);
+    ASSERT_EQ(buffers, 1u) << "layout assumption: tree buffer count follows the transform";
+    putLE32(bytes, tree + 8, 0xfffffff0u);  // after buffer count and background
+    const std::string msg = readError(bytes, io::ParticleFormat::VdbPoints);
+    EXPECT_NE(msg.find("corrupt root node"), std::string::npos) << msg;
+}
