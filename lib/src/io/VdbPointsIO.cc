@@ -57,9 +57,11 @@ void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx
 /// bytes it finds (gigabytes seen here). Before handing the bytes over, walk the header and the
 /// grid descriptors ourselves and check every grid's recorded end offset against the real size.
 /// Files without grid offsets (written by io::Stream) only get the header checks.
-/// Each grid's metadata and transform type are walked too (bounded by the grid's end offset).
-/// Known limit: corruption in the tree topology (e.g. tile counts) still reaches OpenVDB 10.0,
-/// which fuzzing showed can then loop for minutes; closing that needs our own topology reader.
+/// Each grid's metadata and transform type are walked too (bounded by the grid's end offset),
+/// and for point grids the root node's tile and child counts (a corrupt count made OpenVDB 10.0
+/// loop for minutes). Known limit: corruption deeper in the tree (internal-node masks, leaf
+/// buffers) still reaches OpenVDB; absurd sizes there surface as std::bad_alloc, reported below
+/// as a corrupt file. Closing that fully needs a topology reader of our own.
 void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
 {
     ByteReader in(data, size, src);
