@@ -61,20 +61,6 @@ int axisOf(const std::string& name)
     return -1;
 }
 
-/// "velocity_1" / "velocity:1" -> ("velocity", 1)
-bool splitComponent(const std::string& n, std::string& base, int& index)
-{
-    const size_t s = n.find_last_of("_:");
-    if (s == std::string::npos || s == 0 || s + 1 >= n.size() || n.size() - s > 3) return false;
-    index = 0;
-    for (size_t i = s + 1; i < n.size(); ++i) {
-        if (!std::isdigit(uint8_t(n[i]))) return false;
-        index = index * 10 + (n[i] - '0');
-    }
-    base = n.substr(0, s);
-    return true;
-}
-
 } // namespace
 
 ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
@@ -145,16 +131,12 @@ ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, st
                                  float(values[i * columns + axis[2]]));
     for (size_t c = 0; c < columns;) {
         if (int(c) == axis[0] || int(c) == axis[1] || int(c) == axis[2]) { ++c; continue; }
-        std::string base, base2;
-        int idx = 0, idx2 = 0;
-        size_t run = 1;
-        if (splitComponent(names[c], base, idx) && idx == 0)
-            while (c + run < columns && splitComponent(names[c + run], base2, idx2) && base2 == base && idx2 == int(run))
-                ++run;
+        std::string base;
+        const size_t run = componentRun(names, c, "_:", base);
         std::vector<float> v(n * run);
         for (size_t i = 0; i < n; ++i)
             for (size_t k = 0; k < run; ++k) v[i * run + k] = float(values[i * columns + c + k]);
-        set.addFloat(run > 1 ? base : names[c], int(run), std::move(v));
+        set.addFloat(base, int(run), std::move(v));
         c += run;
     }
     if (detail) {

@@ -58,20 +58,6 @@ double loadNumber(const uint8_t* p, const PlyType& t, bool be)
     }
 }
 
-/// Split "name_3" into ("name", 3); false when there is no numeric suffix.
-bool splitIndexed(const std::string& n, std::string& base, int& index)
-{
-    const size_t us = n.find_last_of('_');
-    if (us == std::string::npos || us == 0 || us + 1 >= n.size() || n.size() - us > 3) return false;
-    index = 0;
-    for (size_t i = us + 1; i < n.size(); ++i) {
-        if (!std::isdigit(uint8_t(n[i]))) return false;
-        index = index * 10 + (n[i] - '0');
-    }
-    base = n.substr(0, us);
-    return true;
-}
-
 } // namespace
 
 ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
@@ -154,18 +140,15 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
             set.positions.resize(n);
             for (size_t i = 0; i < n; ++i)
                 set.positions[i] = Vec3f(float(values[i * np + ix]), float(values[i * np + iy]), float(values[i * np + iz]));
-            // Remaining properties, regrouping base_0..base_k-1 runs.
+            // Remaining properties, regrouping base_0..base_k-1 runs of one kind (float or int).
+            std::vector<std::string> names;
+            for (const PlyProperty& prop : e.props) names.push_back(prop.name);
             for (size_t k = 0; k < np;) {
                 if (int(k) == ix || int(k) == iy || int(k) == iz) { ++k; continue; }
-                std::string base, base2;
-                int idx = 0, idx2 = 0;
-                size_t run = 1;
-                if (splitIndexed(e.props[k].name, base, idx) && idx == 0) {
-                    while (k + run < np && splitIndexed(e.props[k + run].name, base2, idx2) && base2 == base &&
-                           idx2 == int(run) && e.props[k + run].type.isFloat == e.props[k].type.isFloat)
-                        ++run;
-                }
-                const std::string name = run > 1 ? base : e.props[k].name;
+                std::string name;
+                size_t run = componentRun(names, k, "_", name);
+                for (size_t r = 1; r < run; ++r)
+                    if (e.props[k + r].type.isFloat != e.props[k].type.isFloat) run = 1, name = names[k];
                 const int comps = int(run);
                 if (e.props[k].type.isFloat) {
                     std::vector<float> v(n * comps);

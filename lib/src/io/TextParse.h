@@ -77,5 +77,33 @@ inline std::string lower(std::string s)
     return s;
 }
 
+/// Columns/properties named base<sep>0, base<sep>1, ... (sep one of separators) form one vector
+/// attribute. Returns how many names from names[first] on form such a run (1 when none; a run of
+/// one is not regrouped), and its base name.
+inline size_t componentRun(const std::vector<std::string>& names, size_t first, const char* separators,
+                           std::string& base)
+{
+    auto split = [&](const std::string& n, std::string& b, int& index) {
+        const size_t s = n.find_last_of(separators);
+        if (s == std::string::npos || s == 0 || s + 1 >= n.size() || n.size() - s > 3) return false;
+        index = 0;
+        for (size_t i = s + 1; i < n.size(); ++i) {
+            if (!std::isdigit(uint8_t(n[i]))) return false;
+            index = index * 10 + (n[i] - '0');
+        }
+        b = n.substr(0, s);
+        return true;
+    };
+    base = names[first];
+    std::string b, other;
+    int index = 0;
+    if (!split(names[first], b, index) || index != 0) return 1;
+    size_t run = 1;
+    while (first + run < names.size() && split(names[first + run], other, index) && other == b && index == int(run))
+        ++run;
+    if (run > 1) base = b;
+    return run;
+}
+
 } // namespace io_internal
 } // namespace fluidsurf

@@ -62,6 +62,58 @@ void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx
 /// loop for minutes). Known limit: corruption deeper in the tree (internal-node masks, leaf
 /// buffers) still reaches OpenVDB; absurd sizes there surface as std::bad_alloc, reported below
 /// as a corrupt file. Closing that fully needs a topology reader of our own.
+/// Length-prefixed string; returns it (callers need the grid type and transform name).
+std::string readVdbString(ByteReader& in, const char* what)
+{
+    const int32_t len = in.read<int32_t>(false, what);
+    if (len < 0) in.fail(std::string("negative length of ") + what);
+    const uint8_t* p = in.take(size_t(len), what);
+    return std::string(reinterpret_cast<const char*>(p), size_t(len));
+}
+
+/// A MetaMap: count, then (name, type name, value) length-prefixed strings; names non-empty.
+void skipVdbMetaMap(ByteReader& in, const char* what)
+{
+    const int32_t count = in.read<int32_t>(false, what);
+    if (count < 0 || size_t(count) > in.remaining() / 12)
+        in.fail(std::string("corrupt ") + what + " " + std::to_string(count));
+    for (int32_t m = 0; m < count; ++m) {
+        if (readVdbString(in, "metadata name").empty()) in.fail("empty metadata name");
+        readVdbString(in, "metadata type");
+        readVdbString(in, "metadata value");
+    }
+}
+
+/// One grid's own bytes (a reader bounded by its end offset, positioned at its start):
+/// compression flags, grid metadata, transform type and, for point grids, the root node's tile
+/// and child counts (a corrupt count makes OpenVDB loop for minutes).
+void checkVdbGrid(ByteReader& in, const std::string& gridType)
+{
+    in.skip(4, "grid compression flags");
+    skipVdbMetaMap(in, "grid metadata count");
+    const std::string map = readVdbString(in, "transform type");
+    if (map.size() < 4 || map.size() > 64 || map.compare(map.size() - 3, 3, "Map") != 0)
+        in.fail("corrupt transform type '" + map.substr(0, 40) + "'");
+    // Serialized sizes of the fixed-size maps (their read() in openvdb/math/Maps.h).
+    static const std::pair<const char*, size_t> kMapBytes[] = {
+        {"UniformScaleMap", 120}, {"ScaleMap", 120}, {"UniformScaleTranslateMap", 144},
+        {"ScaleTranslateMap", 144}, {"TranslationMap", 24}, {"AffineMap", 128}, {"UnitaryMap", 128}};
+    size_t mapBytes = 0;
+    for (const auto& [name, bytes] : kMapBytes)
+        if (map == name) mapBytes = bytes;
+    if (!mapBytes || gridType != "Tree_ptdataidx32_5_4_3") return;
+    in.skip(mapBytes, "transform");
+    const int32_t buffers = in.read<int32_t>(false, "tree buffer count");
+    if (buffers != 1) in.fail("corrupt tree buffer count " + std::to_string(buffers));
+    in.skip(4, "root background");
+    const uint64_t tiles = in.read<uint32_t>(false, "root tile count");
+    const uint64_t children = in.read<uint32_t>(false, "root child count");
+    // a tile is 17 bytes; a child at least its origin and two 32^3-bit masks
+    if (tiles * 17 + children * (12 + 2 * 4096) > in.remaining())
+        in.fail("corrupt root node: " + std::to_string(tiles) + " tiles and " + std::to_string(children) +
+                " children do not fit in the grid");
+}
+
 void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
 {
     ByteReader in(data, size, src);
@@ -72,35 +124,14 @@ void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
     in.skip(8, "library version");
     const bool hasOffsets = *in.take(1, "grid offsets flag") != 0;
     in.skip(36, "UUID");
-    auto skipString = [&](const char* what) {
-        const int32_t len = in.read<int32_t>(false, what);
-        if (len < 0) in.fail(std::string("negative length of ") + what);
-        in.skip(size_t(len), what);
-    };
-    // A MetaMap: count, then (name, type name, value) length-prefixed strings; names non-empty.
-    auto skipMetaMap = [&](const char* what) {
-        const int32_t count = in.read<int32_t>(false, what);
-        if (count < 0 || size_t(count) > in.remaining() / 12)
-            in.fail(std::string("corrupt ") + what + " " + std::to_string(count));
-        for (int32_t m = 0; m < count; ++m) {
-            const size_t at = in.offset();
-            if (in.read<int32_t>(false, "metadata name length") <= 0) in.failAt(at, "empty or negative metadata name length");
-            in.seek(at);
-            skipString("metadata name");
-            skipString("metadata type");
-            skipString("metadata value");
-        }
-    };
-    skipMetaMap("file metadata count");
+    skipVdbMetaMap(in, "file metadata count");
     if (!hasOffsets) return;
     const int32_t grids = in.read<int32_t>(false, "grid count");
     if (grids < 0 || size_t(grids) > in.remaining() / 36) in.fail("corrupt grid count " + std::to_string(grids));
     for (int32_t g = 0; g < grids; ++g) {
-        skipString("grid name");
-        const size_t typeAt = in.offset() + 4;
-        skipString("grid type");
-        const std::string gridType(reinterpret_cast<const char*>(data + typeAt), in.offset() - typeAt);
-        skipString("grid instance parent");
+        readVdbString(in, "grid name");
+        const std::string gridType = readVdbString(in, "grid type");
+        readVdbString(in, "grid instance parent");
         const int64_t gridPos = in.read<int64_t>(false, "grid offset");
         const int64_t blockPos = in.read<int64_t>(false, "grid block offset");
         const int64_t endPos = in.read<int64_t>(false, "grid end offset");
@@ -109,40 +140,9 @@ void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
         if (uint64_t(endPos) > size)
             in.fail("grid " + std::to_string(g) + " ends at byte " + std::to_string(endPos) + " but the file has " +
                     std::to_string(size) + " bytes (truncated file?)");
-        const size_t next = in.offset();
-        // The grid itself, bounded by its end: compression flags, grid metadata, transform type.
         ByteReader grid(data, size_t(endPos), src);
         grid.seek(size_t(gridPos));
-        std::swap(in, grid);
-        in.skip(4, "grid compression flags");
-        skipMetaMap("grid metadata count");
-        const int32_t mapLen = in.read<int32_t>(false, "transform type length");
-        if (mapLen <= 0 || mapLen > 64) in.fail("corrupt transform type length " + std::to_string(mapLen));
-        const std::string map(reinterpret_cast<const char*>(in.take(size_t(mapLen), "transform type")), size_t(mapLen));
-        if (map.size() < 4 || map.compare(map.size() - 3, 3, "Map") != 0)
-            in.fail("corrupt transform type '" + map.substr(0, 40) + "'");
-        // Point grids: bound the root's tile and child counts by the bytes the grid holds (a
-        // corrupt count makes OpenVDB loop for minutes). Map sizes are those of Maps.h read().
-        static const std::pair<const char*, size_t> kMapBytes[] = {
-            {"UniformScaleMap", 120}, {"ScaleMap", 120}, {"UniformScaleTranslateMap", 144},
-            {"ScaleTranslateMap", 144}, {"TranslationMap", 24}, {"AffineMap", 128}, {"UnitaryMap", 128}};
-        size_t mapBytes = 0;
-        for (const auto& [name, bytes] : kMapBytes)
-            if (map == name) mapBytes = bytes;
-        if (mapBytes && gridType == "Tree_ptdataidx32_5_4_3") {
-            in.skip(mapBytes, "transform");
-            const int32_t buffers = in.read<int32_t>(false, "tree buffer count");
-            if (buffers != 1) in.fail("corrupt tree buffer count " + std::to_string(buffers));
-            in.skip(4, "root background");
-            const uint64_t tiles = in.read<uint32_t>(false, "root tile count");
-            const uint64_t children = in.read<uint32_t>(false, "root child count");
-            // a tile is 17 bytes; a child at least its origin and two 32^3-bit masks
-            if (tiles * 17 + children * (12 + 2 * 4096) > in.remaining())
-                in.fail("corrupt root node: " + std::to_string(tiles) + " tiles and " + std::to_string(children) +
-                        " children do not fit in the grid");
-        }
-        std::swap(in, grid);
-        in.seek(next);
+        checkVdbGrid(grid, gridType);
     }
 }
 
@@ -293,8 +293,9 @@ void writeVdbPoints(const ParticleSet& ps, const std::string& path, bool compres
         throw OutputError(path + ": " + std::to_string(bad) +
                           " particle(s) have NaN/Inf positions, which VDB points cannot store");
     vdb::initialize();
-    std::vector<VdbVec3f> positions(ps.size());
-    std::memcpy(positions.data(), ps.positions.data(), ps.size() * sizeof(VdbVec3f));
+    std::vector<VdbVec3f> positions;
+    positions.reserve(ps.size());
+    for (const Vec3f& p : ps.positions) positions.emplace_back(p.x, p.y, p.z);
     points::PointAttributeVector<VdbVec3f> wrapper(positions);
     // About 8 points per voxel, rounded down to a power of two (see the header comment).
     double voxel = ps.size() > 1 ? double(points::computeVoxelSize(wrapper, 8)) : 1.0;
@@ -311,7 +312,7 @@ void writeVdbPoints(const ParticleSet& ps, const std::string& path, bool compres
         if (a.name == "P") throw OutputError(path + ": attribute named \"P\" clashes with VDB positions");
         if (a.type == AttributeType::Float && a.components == 3) {
             std::vector<VdbVec3f> v(ps.size());
-            std::memcpy(v.data(), a.floats.data(), v.size() * sizeof(VdbVec3f));
+            for (size_t i = 0; i < v.size(); ++i) v[i] = VdbVec3f(&a.floats[3 * i]);
             points::appendAttribute<VdbVec3f>(grid->tree(), a.name);
             points::populateAttribute(grid->tree(), indexGrid->tree(), a.name, points::PointAttributeVector<VdbVec3f>(v));
         } else if (a.type == AttributeType::Float) {
