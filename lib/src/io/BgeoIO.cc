@@ -150,8 +150,7 @@ Bytes encodeBgeo(const ParticleSet& ps)
     size_t perPoint = 16;
     for (const Attribute& a : ps.attributes) perPoint += 4 * size_t(a.components);
     out.reserve(64 + ps.size() * perPoint);
-    const char magic[] = {'B', 'g', 'e', 'o', 'V'};
-    out.insert(out.end(), magic, magic + 5);
+    for (char c : {'B', 'g', 'e', 'o', 'V'}) out.push_back(uint8_t(c));
     put32(out, 5);
     const uint32_t counts[8] = {uint32_t(ps.size()), 0, 0, 0, uint32_t(ps.attributes.size()), 0, 0, 0};
     for (uint32_t c : counts) put32(out, c);
