@@ -15,6 +15,7 @@ using Runner = std::function<int()>;
 Runner addInfoCommand(CLI::App& app);
 Runner addConvertCommand(CLI::App& app);
 Runner addGenerateCommand(CLI::App& app);
+Runner addRasterizeCommand(CLI::App& app);
 
 } // namespace cli
 } // namespace fluidsurf

@@ -19,6 +19,7 @@ int main(int argc, char** argv)
   fluidsurf convert frame.vtk frame.vdb          particles to OpenVDB points
   fluidsurf convert 'sim/f_{:04}.bgeo' 'out/f_{:04}.ply' --frames 1-100
   fluidsurf generate drop --count 100000 -o drop.bgeo
+  fluidsurf rasterize frame.bgeo -r 0.025 -o frame.vdb   narrow-band level set
 
 Frame sequences: {:04}, #### or %04d in a file name; --frames A-B picks frames,
 otherwise every matching file on disk is used.
@@ -26,6 +27,7 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
     const cli::Runner info = cli::addInfoCommand(app);
     const cli::Runner convert = cli::addConvertCommand(app);
     const cli::Runner generate = cli::addGenerateCommand(app);
+    const cli::Runner rasterize = cli::addRasterizeCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
@@ -42,6 +44,7 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
         if (app.got_subcommand("info")) return info();
         if (app.got_subcommand("convert")) return convert();
         if (app.got_subcommand("generate")) return generate();
+        if (app.got_subcommand("rasterize")) return rasterize();
     } catch (const fluidsurf::Error& e) {
         std::cerr << "fluidsurf: error: " << e.what() << "\n";
         return 1;

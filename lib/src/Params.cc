@@ -1,0 +1,78 @@
+// Params.cc - defaults and validation of the pipeline parameters.
+#include <fluidsurf/Error.h>
+#include <fluidsurf/Params.h>
+
+#include <cmath>
+
+namespace fluidsurf {
+
+Params Params::fromRadius(double r)
+{
+    Params p;
+    p.radius = r;
+    p.voxelSize = r;
+    p.influenceRadius = 4 * r;
+    p.smoothingLength = 4 * r;
+    p.bandWidth = 2 * r;
+    return p;
+}
+
+namespace {
+void requirePositive(double v, const char* name)
+{
+    if (!(v > 0) || !std::isfinite(v))
+        throw ValueError(std::string(name) + " must be a positive finite number (got " + std::to_string(v) + ")");
+}
+} // namespace
+
+void Params::validate() const
+{
+    requirePositive(radius, "particle radius");
+    requirePositive(voxelSize, "voxel size");
+    requirePositive(influenceRadius, "influence radius R");
+    requirePositive(smoothingLength, "smoothing length h");
+    requirePositive(bandWidth, "band width");
+    requirePositive(halfWidth, "half width");
+    if (!std::isfinite(tLow) || !std::isfinite(tHigh) || !(tLow < tHigh))
+        throw ValueError("t_low must be smaller than t_high (got " + std::to_string(tLow) + ", " +
+                         std::to_string(tHigh) + ")");
+    if (surfaceNeighbours < 0 || splashNeighbours < 0)
+        throw ValueError("neighbour thresholds must not be negative");
+    if (!std::isfinite(colorFieldThreshold) || colorFieldThreshold < 0)
+        throw ValueError("color-field threshold must be a finite number >= 0");
+    if (!std::isfinite(colorGradientThreshold) || colorGradientThreshold < 0)
+        throw ValueError("color-gradient threshold must be a finite number >= 0");
+    // The field kernel reads particles up to R from a vertex; a voxel many times smaller than
+    // the particles only multiplies work and memory without adding detail.
+    if (voxelSize < radius / 64)
+        throw ValueError("voxel size below r/64 is not supported (got " + std::to_string(voxelSize / radius) + " r)");
+}
+
+const char* fieldName(FieldKind f) { return f == FieldKind::Ssp07 ? "ssp07" : "zb05"; }
+
+const char* methodName(FieldMethod m)
+{
+    switch (m) {
+    case FieldMethod::NarrowBand: return "narrow-band";
+    case FieldMethod::GatherFull: return "gather-full";
+    case FieldMethod::Scatter: return "scatter";
+    }
+    return "?";
+}
+
+FieldKind fieldFromName(const std::string& name)
+{
+    if (name == "ssp07") return FieldKind::Ssp07;
+    if (name == "zb05") return FieldKind::Zb05;
+    throw ValueError("unknown field '" + name + "' (ssp07, zb05)");
+}
+
+FieldMethod methodFromName(const std::string& name)
+{
+    if (name == "narrow-band") return FieldMethod::NarrowBand;
+    if (name == "gather-full") return FieldMethod::GatherFull;
+    if (name == "scatter") return FieldMethod::Scatter;
+    throw ValueError("unknown method '" + name + "' (narrow-band, gather-full, scatter)");
+}
+
+} // namespace fluidsurf

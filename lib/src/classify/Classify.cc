@@ -1,0 +1,109 @@
+// Classify.cc - neighbour counts and color field per particle, cell by cell.
+#include "classify/Classify.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace fluidsurf {
+namespace classify {
+
+namespace {
+constexpr int kLanes = 8;  // independent partial sums: lets the compiler vectorize the loop
+
+struct Neighbourhood
+{
+    std::vector<float> x, y, z, v;  // candidates of one cell, padded to a multiple of kLanes
+    void clear() { x.clear(), y.clear(), z.clear(), v.clear(); }
+    void pad()
+    {
+        while (x.size() % kLanes) x.push_back(3e38f), y.push_back(3e38f), z.push_back(3e38f), v.push_back(0);
+    }
+};
+} // namespace
+
+Classification classifyParticles(const neighbors::CellIndex& index, const Params& params)
+{
+    const size_t n = index.size();
+    Classification out;
+    out.classes.assign(n, Interior);
+    out.neighbours.assign(n, 0);
+    out.colorField.assign(n, 0.f);
+    out.colorGradient.assign(n, 0.f);
+    const double h = params.smoothingLength;
+    const float h2 = float(h * h);
+    const double poly6 = 315.0 / (64.0 * M_PI * std::pow(h, 9));
+    const double uniformVolume = std::pow(2 * params.radius, 3);
+
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, index.cellCount(), 16), [&](const tbb::blocked_range<size_t>& cells) {
+        Neighbourhood nb;
+        for (size_t c = cells.begin(); c != cells.end(); ++c) {
+            const uint32_t b = index.starts[c], e = index.starts[c + 1];
+            // Box of the cell's particles, widened by h: everything any of them can reach.
+            // Coordinates relative to the first particle keep float rounding small.
+            const Vec3f o = index.positions[b];
+            double lo[3] = {o.x, o.y, o.z}, hi[3] = {o.x, o.y, o.z};
+            for (uint32_t i = b; i < e; ++i)
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = std::min(lo[a], double(index.positions[i][a]));
+                    hi[a] = std::max(hi[a], double(index.positions[i][a]));
+                }
+            for (int a = 0; a < 3; ++a) lo[a] -= h, hi[a] += h;
+            nb.clear();
+            index.forEachCellInBox(lo, hi, [&](uint32_t cb, uint32_t ce) {
+                for (uint32_t j = cb; j < ce; ++j) {
+                    const Vec3f& p = index.positions[j];
+                    nb.x.push_back(float(double(p.x) - o.x));
+                    nb.y.push_back(float(double(p.y) - o.y));
+                    nb.z.push_back(float(double(p.z) - o.z));
+                    const double rj = index.radii.empty() ? params.radius : index.radii[j];
+                    nb.v.push_back(float(index.radii.empty() ? uniformVolume : 8 * rj * rj * rj));
+                }
+            });
+            nb.pad();
+            const size_t m = nb.x.size();
+            for (uint32_t i = b; i < e; ++i) {
+                const Vec3f& p = index.positions[i];
+                const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y), pz = float(double(p.z) - o.z);
+                float count[kLanes] = {}, cf[kLanes] = {}, gx[kLanes] = {}, gy[kLanes] = {}, gz[kLanes] = {};
+                for (size_t j = 0; j < m; j += kLanes)
+                    for (int l = 0; l < kLanes; ++l) {
+                        const float dx = nb.x[j + l] - px, dy = nb.y[j + l] - py, dz = nb.z[j + l] - pz;
+                        const float d2 = dx * dx + dy * dy + dz * dz;
+                        const float t = std::max(0.f, h2 - d2);
+                        count[l] += d2 < h2 ? 1.f : 0.f;
+                        const float vt2 = nb.v[j + l] * t * t;
+                        cf[l] += vt2 * t;
+                        gx[l] += vt2 * dx, gy[l] += vt2 * dy, gz[l] += vt2 * dz;
+                    }
+                double cnt = 0, sum = 0, g[3] = {0, 0, 0};
+                for (int l = 0; l < kLanes; ++l) cnt += count[l], sum += cf[l], g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
+                // |grad cf| * h: dimensionless, 0 inside, 0.62 on a flat lattice face.
+                const float gradient = float(6 * poly6 * h * std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]));
+                const uint32_t neighbours = uint32_t(cnt) - 1;  // self is at distance 0
+                const float colorField = float(sum * poly6);
+                out.neighbours[i] = neighbours;
+                out.colorField[i] = colorField;
+                out.colorGradient[i] = gradient;
+                uint8_t cls = Interior;
+                if (neighbours == 0) cls = Isolated;
+                else if (int(neighbours) < params.splashNeighbours) cls = Splash;
+                else if (int(neighbours) < params.surfaceNeighbours || colorField < params.colorFieldThreshold ||
+                         gradient > params.colorGradientThreshold)
+                    cls = Surface;
+                out.classes[i] = cls;
+            }
+        }
+    });
+    for (uint8_t c : out.classes) {
+        if (c == Interior) ++out.interior;
+        else if (c == Surface) ++out.surface;
+        else if (c == Splash) ++out.splash;
+        else ++out.isolated;
+    }
+    return out;
+}
+
+} // namespace classify
+} // namespace fluidsurf

@@ -1,0 +1,48 @@
+// Classify.h - particle classification (thesis §4.2.2, §5.2.3, §6.2): which particles seed the
+// narrow band and which take part in the field at all.
+//
+// For every particle: the number of other particles closer than h and the smoothed color field
+// (eq. 4.6) cf_i = sum_j V_j W(|x_i - x_j|, h), self included, with the poly6 kernel
+// W(d, h) = 315 / (64 pi h^9) (h^2 - d^2)^3 and the rest volume V_j = (2 r_j)^3 standing in for
+// m_j / rho_j (frames rarely carry masses). cf is ~1.0 inside the fluid; on a flat lattice face
+// it is 0.82 and on the layer below exactly the interior value, because the kernel's support h
+// = 4r reaches two spacings. The color field alone misses surfaces where the simulator packs
+// particles densely (fluid against a wall: cf >= 1 on the free side too), so its gradient
+// (MCG03's surface normal), scaled by h, is tested as well: 0 inside, 0.62 on a lattice face.
+// Classes:
+//   isolated  no neighbour within h (left out of the field; later rendered as spheres)
+//   splash    1 or 2 neighbours (< splashNeighbours): surface, and finest level in ch. 6
+//   surface   cf < colorFieldThreshold, |grad cf| h > colorGradientThreshold, or fewer than
+//             surfaceNeighbours neighbours
+//   interior  everything else
+#pragma once
+
+#include "neighbors/CellIndex.h"
+
+#include <fluidsurf/Params.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace fluidsurf {
+namespace classify {
+
+enum ParticleClass : uint8_t { Interior = 0, Surface = 1, Splash = 2, Isolated = 3 };
+
+inline bool isSurface(uint8_t c) { return c == Surface || c == Splash; }
+
+struct Classification
+{
+    std::vector<uint8_t> classes;       ///< per particle, in the index's cell order
+    std::vector<uint32_t> neighbours;   ///< other particles closer than h
+    std::vector<float> colorField;      ///< cf_i as above
+    std::vector<float> colorGradient;   ///< |grad cf_i| * h (MCG03's surface normal length)
+    size_t interior = 0, surface = 0, splash = 0, isolated = 0;  ///< surface excludes splash
+};
+
+/// Parallel over occupied cells; each cell gathers its neighbourhood once.
+/// uniformRadius is used when the index has no per-particle radii.
+Classification classifyParticles(const neighbors::CellIndex& index, const Params& params);
+
+} // namespace classify
+} // namespace fluidsurf

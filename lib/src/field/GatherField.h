@@ -1,0 +1,29 @@
+// GatherField.h - the field stage (thesis §4.2.2, "Scalar value computation"): every active voxel
+// of a FloatTree gathers all particles within R (surface and inner ones alike, so no double
+// layer forms, thesis Fig. 4.2) and stores phi (FieldValue.h).
+//
+// Parallel over VDB leaves with TBB. Each leaf gathers its neighbourhood from the cell index once
+// (the particles within R of the leaf's 8^3 voxels), sorts it into z-slabs of one voxel, and then
+// walks its voxel rows along z: a row keeps the particles within R of its (x, y) line, and a voxel
+// reads the slabs within R of its z. The per-voxel sum has a fixed order and fixed lanes, so the
+// output is bitwise identical for any thread count, and the same for the narrow band and for
+// gather-full (both call this on their topology).
+#pragma once
+
+#include "neighbors/CellIndex.h"
+
+#include <fluidsurf/Params.h>
+
+#include <openvdb/openvdb.h>
+
+#include <cstddef>
+
+namespace fluidsurf {
+namespace field {
+
+/// Fill every active voxel of tree (voxel (i,j,k) at (i,j,k) * voxelSize) with phi, clamped to
+/// +-background. Inactive voxels are left alone. Returns the number of field evaluations.
+size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles, const Params& params);
+
+} // namespace field
+} // namespace fluidsurf

@@ -1,0 +1,27 @@
+// LevelSet.h - the last stage: field values on a tree -> a proper OpenVDB level set grid
+// (sign flood fill, pruning, class, name, transform, metadata), and its deterministic file.
+#pragma once
+
+#include <fluidsurf/Params.h>
+
+#include <openvdb/openvdb.h>
+
+#include <string>
+
+namespace fluidsurf {
+namespace levelset {
+
+struct GridInfo
+{
+    size_t particles = 0, isolated = 0;
+    std::string source;
+};
+
+/// Turn a tree of clamped field values into the "surface" level-set grid. With
+/// keepOnlyBand, voxels whose |phi| reached the background are deactivated first (the
+/// volume methods activate every vertex; the narrow band keeps its band).
+openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Params& params, bool keepOnlyBand,
+                                       const GridInfo& info);
+
+} // namespace levelset
+} // namespace fluidsurf

@@ -1,0 +1,99 @@
+// NarrowBand.cc - band topology from the surface particles.
+#include "narrowband/NarrowBand.h"
+
+#include <fluidsurf/Error.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace fluidsurf {
+namespace narrowband {
+
+double effectiveBandWidth(const Params& params, double maxRadius)
+{
+    return std::max(params.bandWidth, maxRadius + params.voxelSize);
+}
+
+namespace {
+struct BandBuilder
+{
+    const neighbors::CellIndex& particles;
+    const std::vector<uint32_t>& seeds;
+    double width, invDx;
+    openvdb::MaskTree::Ptr tree{new openvdb::MaskTree(false)};
+
+    BandBuilder(const neighbors::CellIndex& p, const std::vector<uint32_t>& s, double w, double inv)
+        : particles(p), seeds(s), width(w), invDx(inv) {}
+    BandBuilder(BandBuilder& o, tbb::split)
+        : particles(o.particles), seeds(o.seeds), width(o.width), invDx(o.invDx) {}
+
+    void operator()(const tbb::blocked_range<size_t>& r)
+    {
+        openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(*tree);
+        for (size_t s = r.begin(); s != r.end(); ++s) {
+            const Vec3f& p = particles.positions[seeds[s]];
+            int lo[3], hi[3];
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = int(std::ceil((p[a] - width) * invDx));
+                hi[a] = int(std::floor((p[a] + width) * invDx));
+            }
+            openvdb::Coord ijk;
+            for (ijk[0] = lo[0]; ijk[0] <= hi[0]; ++ijk[0])
+                for (ijk[1] = lo[1]; ijk[1] <= hi[1]; ++ijk[1])
+                    for (ijk[2] = lo[2]; ijk[2] <= hi[2]; ++ijk[2]) acc.setValueOn(ijk);
+        }
+    }
+    void join(BandBuilder& other) { tree->topologyUnion(*other.tree); }
+};
+} // namespace
+
+openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
+                                       const classify::Classification& classes, const Params& params)
+{
+    std::vector<uint32_t> seeds;
+    float maxRadius = float(params.radius);
+    for (size_t i = 0; i < classes.classes.size(); ++i)
+        if (classify::isSurface(classes.classes[i]) ||
+            (params.keepIsolated && classes.classes[i] == classify::Isolated)) {
+            seeds.push_back(uint32_t(i));
+            if (!particles.radii.empty()) maxRadius = std::max(maxRadius, particles.radii[i]);
+        }
+    BandBuilder builder(particles, seeds, effectiveBandWidth(params, maxRadius), 1 / params.voxelSize);
+    tbb::parallel_reduce(tbb::blocked_range<size_t>(0, seeds.size(), 256), builder);
+    return builder.tree;
+}
+
+openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const Params& params)
+{
+    if (particles.size() == 0) return openvdb::CoordBBox();  // empty
+    BBox3f box;
+    for (const Vec3f& p : particles.positions) box.expand(p);
+    const double inv = 1 / params.voxelSize, R = params.influenceRadius;
+    openvdb::Coord lo, hi;
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = int(std::floor((box.min[a] - R) * inv));
+        hi[a] = int(std::ceil((box.max[a] + R) * inv));
+    }
+    return openvdb::CoordBBox(lo, hi);
+}
+
+double checkDenseMemory(const openvdb::CoordBBox& box, double bytesPerVertex, const char* what)
+{
+    const openvdb::Coord d = box.dim();
+    const double bytes = double(d.x()) * double(d.y()) * double(d.z()) * bytesPerVertex;
+    const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+    if (physical > 0 && bytes > 0.8 * physical)
+        throw ValueError(std::string(what) + " needs about " + std::to_string(int64_t(bytes / (1 << 20))) +
+                         " MiB for " + std::to_string(d.x()) + " x " + std::to_string(d.y()) + " x " +
+                         std::to_string(d.z()) + " vertices, more than this machine has; use the narrow band");
+    return bytes;
+}
+
+} // namespace narrowband
+} // namespace fluidsurf

@@ -1,0 +1,140 @@
+// CellIndex.cc - Morton keys, parallel sort, cell ranges.
+#include "neighbors/CellIndex.h"
+
+#include <fluidsurf/Error.h>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace fluidsurf {
+namespace neighbors {
+
+namespace {
+uint64_t spreadBits(uint32_t v)  // 21 bits -> every third bit of 63
+{
+    uint64_t x = v & 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffull;
+    x = (x | x << 16) & 0x1f0000ff0000ffull;
+    x = (x | x << 8) & 0x100f00f00f00f00full;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+    x = (x | x << 2) & 0x1249249249249249ull;
+    return x;
+}
+
+struct Handle  // the thesis' "handler": cell key and particle id
+{
+    uint64_t key;
+    uint32_t index;
+    bool operator<(const Handle& o) const { return key < o.key || (key == o.key && index < o.index); }
+};
+} // namespace
+
+uint64_t mortonKey(uint32_t cx, uint32_t cy, uint32_t cz)
+{
+    return spreadBits(cx) | spreadBits(cy) << 1 | spreadBits(cz) << 2;
+}
+
+int64_t CellIndex::cellCoord(double v, int axis) const
+{
+    const double c = std::floor((v - origin[axis]) / cellSize);
+    if (!(c >= 0)) return -1;  // also NaN
+    if (c >= double(dims[axis])) return dims[axis];
+    return int64_t(c);
+}
+
+CellRange CellIndex::find(int64_t cx, int64_t cy, int64_t cz) const
+{
+    if (cx < 0 || cy < 0 || cz < 0 || cx >= dims[0] || cy >= dims[1] || cz >= dims[2]) return {};
+    const uint64_t key = mortonKey(uint32_t(cx), uint32_t(cy), uint32_t(cz));
+    const auto it = std::lower_bound(keys.begin(), keys.end(), key);
+    if (it == keys.end() || *it != key) return {};
+    const size_t c = size_t(it - keys.begin());
+    return {starts[c], starts[c + 1]};
+}
+
+CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, double cellSize)
+{
+    if (n >= (size_t(1) << 32) - 1) throw ValueError("more than 2^32 - 2 particles in one frame");
+    if (!(cellSize > 0)) throw ValueError("cell size must be positive");
+    CellIndex index;
+    index.cellSize = cellSize;
+    if (n == 0) {
+        index.starts.push_back(0);
+        return index;
+    }
+    BBox3f box;
+    for (size_t i = 0; i < n; ++i) box.expand(positions[i]);
+    for (int a = 0; a < 3; ++a) {
+        // One empty cell of margin below keeps cellCoord's -1 sentinel unoccupied.
+        index.origin[a] = std::floor(double(box.min[a]) / cellSize) * cellSize;
+        const double cells = std::floor((double(box.max[a]) - index.origin[a]) / cellSize) + 1;
+        if (!(cells < double(kMaxCellsPerAxis)))
+            throw ValueError("the particles span " + std::to_string(cells) + " cells of size " +
+                             std::to_string(cellSize) + " along " + "xyz"[a] +
+                             " (at most 2097152): a stray particle extremely far from the fluid?");
+        index.dims[a] = uint32_t(cells);
+    }
+    std::vector<Handle> handles(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            uint32_t c[3];
+            for (int a = 0; a < 3; ++a) {
+                const double v = std::floor((double(positions[i][a]) - index.origin[a]) / cellSize);
+                c[a] = uint32_t(std::min(std::max(v, 0.0), double(index.dims[a] - 1)));
+            }
+            handles[i] = {mortonKey(c[0], c[1], c[2]), uint32_t(i)};
+        }
+    });
+    tbb::parallel_sort(handles.begin(), handles.end());
+
+    index.positions.resize(n);
+    index.order.resize(n);
+    if (radii) index.radii.resize(n);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            const uint32_t src = handles[i].index;
+            index.order[i] = src;
+            index.positions[i] = positions[src];
+            if (radii) index.radii[i] = radii[src];
+        }
+    });
+    for (size_t i = 0; i < n; ++i)
+        if (i == 0 || handles[i].key != handles[i - 1].key) {
+            index.keys.push_back(handles[i].key);
+            index.starts.push_back(uint32_t(i));
+        }
+    index.starts.push_back(uint32_t(n));
+    return index;
+}
+
+CellIndex selectParticles(const CellIndex& in, const std::vector<uint8_t>& keep)
+{
+    CellIndex out;
+    out.cellSize = in.cellSize;
+    for (int a = 0; a < 3; ++a) {
+        out.origin[a] = in.origin[a];
+        out.dims[a] = in.dims[a];
+    }
+    for (size_t c = 0; c < in.keys.size(); ++c) {
+        const size_t before = out.positions.size();
+        for (uint32_t i = in.starts[c]; i < in.starts[c + 1]; ++i) {
+            if (!keep[i]) continue;
+            out.positions.push_back(in.positions[i]);
+            out.order.push_back(in.order[i]);
+            if (!in.radii.empty()) out.radii.push_back(in.radii[i]);
+        }
+        if (out.positions.size() > before) {
+            out.keys.push_back(in.keys[c]);
+            out.starts.push_back(uint32_t(before));
+        }
+    }
+    out.starts.push_back(uint32_t(out.positions.size()));
+    return out;
+}
+
+} // namespace neighbors
+} // namespace fluidsurf

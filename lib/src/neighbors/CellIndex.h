@@ -1,0 +1,80 @@
+// CellIndex.h - the neighbour structure of the field pipeline (thesis §4.2.2, "handlerArray" and
+// "startIndices"): particles sorted by the Z-order (Morton) id of their cell, cells of a given
+// size, plus the sorted list of occupied cells with the range of particles each holds.
+//
+// Sparse by design: the thesis' startIndices array is dense over the bounding box, so one stray
+// particle far away blows it up. Here only occupied cells are stored (sorted unique Morton keys
+// + offsets) and a cell is found by binary search. That keeps memory proportional to the
+// particle count, is deterministic (no hash order), and keeps Z-order locality: cells that are
+// close in space are close in memory, so a leaf's neighbourhood is a few contiguous runs.
+#pragma once
+
+#include <fluidsurf/Vec3.h>
+
+#include <cstdint>
+#include <vector>
+
+namespace fluidsurf {
+namespace neighbors {
+
+/// Cells per axis are limited to 2^21 (21 bits per axis in a 63-bit Morton key).
+constexpr uint32_t kMaxCellsPerAxis = 1u << 21;
+
+uint64_t mortonKey(uint32_t cx, uint32_t cy, uint32_t cz);  ///< x in the lowest bit
+
+struct CellRange
+{
+    uint32_t begin = 0, end = 0;
+    bool empty() const { return begin == end; }
+};
+
+struct CellIndex
+{
+    double cellSize = 0;
+    double origin[3] = {0, 0, 0};  ///< world position of the corner of cell (0,0,0)
+    uint32_t dims[3] = {0, 0, 0};  ///< cells per axis covering the particles
+    std::vector<uint64_t> keys;    ///< occupied cells, ascending Morton keys
+    std::vector<uint32_t> starts;  ///< keys.size() + 1 offsets into the sorted particle arrays
+    std::vector<Vec3f> positions;  ///< particles in cell order
+    std::vector<float> radii;      ///< per-particle radii in cell order; empty: uniform radius
+    std::vector<uint32_t> order;   ///< cell order -> index in the input
+
+    size_t size() const { return positions.size(); }
+    size_t cellCount() const { return keys.size(); }
+
+    /// Cell coordinate of a world position along an axis, clamped to [-1, dims] so callers can
+    /// loop over a range without overflow (-1 and dims are never occupied).
+    int64_t cellCoord(double v, int axis) const;
+
+    /// Particles of cell (cx, cy, cz); empty when outside or unoccupied.
+    CellRange find(int64_t cx, int64_t cy, int64_t cz) const;
+
+    /// Calls f(begin, end) for every occupied cell overlapping the world box [lo, hi], in
+    /// ascending (z, y, x) cell order (deterministic).
+    template <typename F>
+    void forEachCellInBox(const double lo[3], const double hi[3], F&& f) const
+    {
+        int64_t c0[3], c1[3];
+        for (int a = 0; a < 3; ++a) {
+            c0[a] = cellCoord(lo[a], a);
+            c1[a] = cellCoord(hi[a], a);
+        }
+        for (int64_t cz = c0[2]; cz <= c1[2]; ++cz)
+            for (int64_t cy = c0[1]; cy <= c1[1]; ++cy)
+                for (int64_t cx = c0[0]; cx <= c1[0]; ++cx) {
+                    const CellRange r = find(cx, cy, cz);
+                    if (!r.empty()) f(r.begin, r.end);
+                }
+    }
+};
+
+/// Sort n particles into cells of the given size (parallel). radii may be null (uniform).
+/// ValueError when the particles span more than kMaxCellsPerAxis cells along an axis.
+CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, double cellSize);
+
+/// The same index restricted to the particles whose keep flag (in cell order) is non-zero;
+/// order and cells stay sorted, so no re-sort is needed.
+CellIndex selectParticles(const CellIndex& index, const std::vector<uint8_t>& keep);
+
+} // namespace neighbors
+} // namespace fluidsurf
