@@ -6,6 +6,7 @@
 #include "field/GatherField.h"
 #include "field/ScatterField.h"
 #include "levelset/LevelSet.h"
+#include "narrowband/CompleteBand.h"
 #include "narrowband/NarrowBand.h"
 #include "neighbors/CellIndex.h"
 
@@ -111,6 +112,11 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
         stats.fieldEvaluations = field::evaluateField(*tree, index, params);
     }
     clock.done("field");
+    if (params.method == FieldMethod::NarrowBand) {
+        stats.bandCompletion = narrowband::completeBand(*tree, index, params);
+        stats.fieldEvaluations += stats.bandCompletion;
+        clock.done("complete band");
+    }
 
     levelset::GridInfo info;
     info.particles = ps.size();

@@ -38,7 +38,7 @@ struct Params
     int splashNeighbours = 3;    ///< fewer neighbours within h: splash particle (ch. 6)
     double colorFieldThreshold = 0.9;  ///< color field (eq. 4.6) below this: surface particle;
                                        ///< ~1.0 inside the fluid, ~0.82 on a flat lattice face
-    double colorGradientThreshold = 0.25;  ///< |grad cf| * h above this: surface particle;
+    double colorGradientThreshold = 0.45;  ///< |grad cf| * h above this: surface particle;
                                            ///< 0 inside, 0.62 on a flat lattice face
     double halfWidth = 3;        ///< level-set background = halfWidth * voxelSize
     bool perParticleRadii = true;  ///< use a radius attribute (pscale) as r_j when present

@@ -32,6 +32,7 @@ struct RasterizeStats
     size_t interior = 0, surface = 0, splash = 0, isolated = 0;  ///< surface excludes splash
     size_t activeVoxels = 0, leaves = 0;
     size_t fieldEvaluations = 0;  ///< vertices at which phi was computed
+    size_t bandCompletion = 0;    ///< voxels added where a zero crossing reached the band's edge
     double bandWidth = 0;         ///< half width actually used, world units
     std::vector<StageTime> stages;
     double totalSeconds() const;

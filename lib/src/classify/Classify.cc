@@ -1,6 +1,8 @@
 // Classify.cc - neighbour counts and color field per particle, cell by cell.
 #include "classify/Classify.h"
 
+#include "util/Lanes.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -10,7 +12,8 @@ namespace fluidsurf {
 namespace classify {
 
 namespace {
-constexpr int kLanes = 8;  // independent partial sums: lets the compiler vectorize the loop
+using util::kLanes;
+using util::Lanes;
 
 struct Neighbourhood
 {
@@ -66,17 +69,18 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
             for (uint32_t i = b; i < e; ++i) {
                 const Vec3f& p = index.positions[i];
                 const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y), pz = float(double(p.z) - o.z);
-                float count[kLanes] = {}, cf[kLanes] = {}, gx[kLanes] = {}, gy[kLanes] = {}, gz[kLanes] = {};
-                for (size_t j = 0; j < m; j += kLanes)
-                    for (int l = 0; l < kLanes; ++l) {
-                        const float dx = nb.x[j + l] - px, dy = nb.y[j + l] - py, dz = nb.z[j + l] - pz;
-                        const float d2 = dx * dx + dy * dy + dz * dz;
-                        const float t = std::max(0.f, h2 - d2);
-                        count[l] += d2 < h2 ? 1.f : 0.f;
-                        const float vt2 = nb.v[j + l] * t * t;
-                        cf[l] += vt2 * t;
-                        gx[l] += vt2 * dx, gy[l] += vt2 * dy, gz[l] += vt2 * dz;
-                    }
+                Lanes count{}, cf{}, gx{}, gy{}, gz{};
+                for (size_t j = 0; j < m; j += kLanes) {
+                    const Lanes dx = util::loadLanes(&nb.x[j]) - px, dy = util::loadLanes(&nb.y[j]) - py,
+                                dz = util::loadLanes(&nb.z[j]) - pz;
+                    const Lanes d2 = dx * dx + dy * dy + dz * dz;
+                    Lanes t = h2 - d2;
+                    t = t > 0.f ? t : 0.f;
+                    count += d2 < h2 ? Lanes{} + 1.f : Lanes{};
+                    const Lanes vt2 = util::loadLanes(&nb.v[j]) * t * t;
+                    cf += vt2 * t;
+                    gx += vt2 * dx, gy += vt2 * dy, gz += vt2 * dz;
+                }
                 double cnt = 0, sum = 0, g[3] = {0, 0, 0};
                 for (int l = 0; l < kLanes; ++l) cnt += count[l], sum += cf[l], g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
                 // |grad cf| * h: dimensionless, 0 inside, 0.62 on a flat lattice face.

@@ -2,6 +2,7 @@
 #include "field/GatherField.h"
 
 #include "field/FieldValue.h"
+#include "util/Lanes.h"
 
 #include <openvdb/tree/LeafManager.h>
 
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 namespace fluidsurf {
@@ -17,10 +19,13 @@ namespace field {
 
 namespace {
 
-constexpr int kLanes = 8;        // independent partial sums per accumulator (vectorizable)
+using util::kLanes;
+using util::Lanes;
 constexpr float kFar = 1e30f;    // padding particle: s^2 = inf -> contributes 0
 
 using LeafT = openvdb::FloatTree::LeafNodeType;
+
+inline Lanes load(const float* p) { return util::loadLanes(p); }
 
 /// Particles near one leaf, in leaf-local coordinates, bucketed by z-slab; and the subset of
 /// one voxel row. Reused from leaf to leaf by one task.
@@ -108,25 +113,22 @@ struct Kernel
     FieldSums sums(const Scratch& s, uint32_t b, uint32_t e, float vx, float vy, float vz) const
     {
         const float invR2 = float(1 / (R * R));
-        float w[kLanes] = {}, d0[kLanes] = {}, d1[kLanes] = {}, d2[kLanes] = {}, rs[kLanes] = {};
-        float g0[kLanes] = {}, g1[kLanes] = {}, g2[kLanes] = {};
-        float m0[kLanes] = {}, m1[kLanes] = {}, m2[kLanes] = {}, m3[kLanes] = {}, m4[kLanes] = {}, m5[kLanes] = {};
+        Lanes w{}, d0{}, d1{}, d2{}, rs{}, g0{}, g1{}, g2{}, m0{}, m1{}, m2{}, m3{}, m4{}, m5{};
         const float *X = s.rx.data(), *Y = s.ry.data(), *Z = s.rz.data(), *Rr = s.rr.data();
         for (uint32_t j = b; j < e; j += kLanes) {
-            for (int l = 0; l < kLanes; ++l) {
-                const float ex = X[j + l] - vx, ey = Y[j + l] - vy, ez = Z[j + l] - vz;
-                const float s2 = (ex * ex + ey * ey + ez * ez) * invR2;
-                const float t = std::max(0.f, 1.f - s2);
-                const float t2 = t * t, wt = t2 * t;
-                w[l] += wt;
-                d0[l] += wt * ex, d1[l] += wt * ey, d2[l] += wt * ez;
-                if (Radii) rs[l] += wt * Rr[j + l];
-                if (Ssp07) {
-                    const float gx = t2 * ex, gy = t2 * ey, gz = t2 * ez;
-                    g0[l] += gx, g1[l] += gy, g2[l] += gz;
-                    m0[l] += gx * ex, m1[l] += gx * ey, m2[l] += gx * ez;
-                    m3[l] += gy * ey, m4[l] += gy * ez, m5[l] += gz * ez;
-                }
+            const Lanes ex = load(X + j) - vx, ey = load(Y + j) - vy, ez = load(Z + j) - vz;
+            const Lanes s2 = (ex * ex + ey * ey + ez * ez) * invR2;
+            Lanes t = 1.f - s2;
+            t = t > 0.f ? t : 0.f;
+            const Lanes t2 = t * t, wt = t2 * t;
+            w += wt;
+            d0 += wt * ex, d1 += wt * ey, d2 += wt * ez;
+            if (Radii) rs += wt * load(Rr + j);
+            if (Ssp07) {
+                const Lanes gx = t2 * ex, gy = t2 * ey, gz = t2 * ez;
+                g0 += gx, g1 += gy, g2 += gz;
+                m0 += gx * ex, m1 += gx * ey, m2 += gx * ez;
+                m3 += gy * ey, m4 += gy * ez, m5 += gz * ez;
             }
         }
         FieldSums out;

@@ -46,14 +46,33 @@ int64_t CellIndex::cellCoord(double v, int axis) const
     return int64_t(c);
 }
 
+namespace {
+inline size_t slotOf(uint64_t key, size_t mask) { return size_t((key * 0x9e3779b97f4a7c15ull) >> 17) & mask; }
+} // namespace
+
+void CellIndex::buildLookup()
+{
+    size_t size = 16;
+    while (size < 2 * keys.size()) size *= 2;  // load factor <= 1/2
+    tableKeys.assign(size, kEmptyKey);
+    tableCells.assign(size, 0);
+    for (size_t c = 0; c < keys.size(); ++c) {
+        size_t slot = slotOf(keys[c], size - 1);
+        while (tableKeys[slot] != kEmptyKey) slot = (slot + 1) & (size - 1);
+        tableKeys[slot] = keys[c];
+        tableCells[slot] = uint32_t(c);
+    }
+}
+
 CellRange CellIndex::find(int64_t cx, int64_t cy, int64_t cz) const
 {
-    if (cx < 0 || cy < 0 || cz < 0 || cx >= dims[0] || cy >= dims[1] || cz >= dims[2]) return {};
+    if (cx < 0 || cy < 0 || cz < 0 || cx >= dims[0] || cy >= dims[1] || cz >= dims[2] || tableKeys.empty()) return {};
     const uint64_t key = mortonKey(uint32_t(cx), uint32_t(cy), uint32_t(cz));
-    const auto it = std::lower_bound(keys.begin(), keys.end(), key);
-    if (it == keys.end() || *it != key) return {};
-    const size_t c = size_t(it - keys.begin());
-    return {starts[c], starts[c + 1]};
+    const size_t mask = tableKeys.size() - 1;
+    for (size_t slot = slotOf(key, mask);; slot = (slot + 1) & mask) {
+        if (tableKeys[slot] == key) return {starts[tableCells[slot]], starts[tableCells[slot] + 1]};
+        if (tableKeys[slot] == kEmptyKey) return {};
+    }
 }
 
 CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, double cellSize)
@@ -108,6 +127,7 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
             index.starts.push_back(uint32_t(i));
         }
     index.starts.push_back(uint32_t(n));
+    index.buildLookup();
     return index;
 }
 
@@ -133,6 +153,7 @@ CellIndex selectParticles(const CellIndex& in, const std::vector<uint8_t>& keep)
         }
     }
     out.starts.push_back(uint32_t(out.positions.size()));
+    out.buildLookup();
     return out;
 }
 

@@ -1,0 +1,23 @@
+// Lanes.h - a few floats processed as one value, through the GCC/Clang vector extensions:
+// explicit SIMD on any x86-64 (SSE2 baseline) without intrinsics. The hot loops of classify and
+// field accumulate per lane and add the lanes in a fixed order at the end, so results do not
+// depend on how work is split between threads.
+#pragma once
+
+#include <cstring>
+
+namespace fluidsurf {
+namespace util {
+
+constexpr int kLanes = 4;  // one SSE register: the field kernel's 14 accumulators fit in 16
+typedef float Lanes __attribute__((vector_size(kLanes * sizeof(float))));
+
+inline Lanes loadLanes(const float* p)
+{
+    Lanes v;
+    std::memcpy(&v, p, sizeof(v));
+    return v;
+}
+
+} // namespace util
+} // namespace fluidsurf

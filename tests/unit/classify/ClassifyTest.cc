@@ -1,0 +1,69 @@
+// Particle classification against hand-countable lattices and a brute-force neighbour count.
+#include "TestData.h"
+#include "unit/field/BruteForce.h"
+
+#include "classify/Classify.h"
+
+#include <fluidsurf/Scenes.h>
+
+using namespace fluidsurf;
+using namespace fluidsurf::test;
+
+namespace {
+classify::Classification classifyScene(const ParticleSet& ps, const Params& p, neighbors::CellIndex& index)
+{
+    index = neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength);
+    return classify::classifyParticles(index, p);
+}
+} // namespace
+
+TEST(Classify, LatticeBlockOuterLayerIsSurfaceAndNothingElse)
+{
+    SceneParams sp;
+    sp.count = 10 * 10 * 10;
+    const ParticleSet ps = generateScene(Scene::Block, sp);
+    const Params p = Params::fromRadius(sp.radius);
+    neighbors::CellIndex index;
+    const classify::Classification c = classifyScene(ps, p, index);
+    size_t outer = 0;
+    for (size_t i = 0; i < index.size(); ++i) {
+        const Vec3f q = index.positions[i];
+        bool onFace = false;
+        for (int a = 0; a < 3; ++a) {
+            const int cell = int(std::lround(q[a] / (2 * sp.radius)));
+            onFace |= cell == 0 || cell == 9;
+        }
+        outer += onFace;
+        EXPECT_EQ(classify::isSurface(c.classes[i]), onFace) << "particle at " << q.x << " " << q.y << " " << q.z
+                                                              << " cf " << c.colorField[i] << " grad "
+                                                              << c.colorGradient[i] << " n " << c.neighbours[i];
+    }
+    EXPECT_EQ(outer, 1000u - 8 * 8 * 8);
+    EXPECT_EQ(c.surface + c.splash, outer);
+    EXPECT_EQ(c.isolated, 0u);
+}
+
+TEST(Classify, NeighbourCountsMatchBruteForce)
+{
+    SceneParams sp;
+    sp.count = 3000;
+    sp.droplets = 4;
+    ParticleSet ps = generateScene(Scene::Drop, sp);
+    // Break the lattice: no pair at exactly h, where float and double may round differently.
+    uint64_t seed = 7;
+    for (Vec3f& v : ps.positions)
+        for (int a = 0; a < 3; ++a) {
+            seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+            v[a] += float((double(seed >> 11) / 9007199254740992.0 - 0.5) * 0.2 * sp.radius);
+        }
+    const Params p = Params::fromRadius(sp.radius);
+    neighbors::CellIndex index;
+    const classify::Classification c = classifyScene(ps, p, index);
+    std::vector<std::array<double, 3>> pts;
+    for (const Vec3f& v : ps.positions) pts.push_back({v.x, v.y, v.z});
+    const std::vector<int> expected = referenceNeighbourCounts(pts, p.smoothingLength);
+    for (size_t i = 0; i < index.size(); ++i) ASSERT_EQ(int(c.neighbours[i]), expected[index.order[i]]) << i;
+    EXPECT_EQ(c.isolated, 4u) << "the drop scene's droplets";
+    for (size_t i = 0; i < index.size(); ++i)
+        EXPECT_EQ(c.classes[i] == classify::Isolated, expected[index.order[i]] == 0);
+}
