@@ -21,6 +21,18 @@ struct ReadBenchOptions
 
 int runReadBench(const ReadBenchOptions& options);
 
+struct FieldBenchOptions
+{
+    std::string scenes = "real,drop-1M,block-1M";
+    std::string voxels = "1";    ///< in r
+    std::string supports = "4";  ///< R in r
+    std::string methods = "narrow-band,narrow-band-1,gather-full,scatter,p2ls,smooth";
+    int repeat = 3;
+    std::string shared = "../shared/data";
+};
+
+int runFieldBench(const FieldBenchOptions& options);
+
 inline double median(std::vector<double> v)
 {
     std::sort(v.begin(), v.end());

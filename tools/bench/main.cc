@@ -1,6 +1,7 @@
 // main.cc - fluidsurf_bench: the benchmark program. Prints per-case wall-time medians,
 // throughput and peak RSS as a Markdown table (or JSON with --json) for BENCHMARKS.md.
 //   fluidsurf_bench io [--count N] [--repeat K]   particle read throughput per format
+//   fluidsurf_bench field [--scenes ...]          rasterize stages vs baselines and OpenVDB
 #include "Bench.h"
 
 #include <CLI/CLI.hpp>
@@ -18,6 +19,15 @@ int main(int argc, char** argv)
     ioCmd->add_option("--dir", io.dir, "folder for the temporary files")->capture_default_str();
     ioCmd->add_option("--shared", io.shared, "../shared/data to also time the real frames ('' to skip)")->capture_default_str();
     ioCmd->add_flag("--json", io.json, "JSON instead of a Markdown table");
+    fluidsurf::bench::FieldBenchOptions field;
+    CLI::App* fieldCmd = app.add_subcommand("field", "rasterize per stage: narrow band vs baselines vs OpenVDB");
+    fieldCmd->add_option("--scenes", field.scenes, "real, hilbert, drop-1M, block-4M, ... (comma-separated)")->capture_default_str();
+    fieldCmd->add_option("--voxel", field.voxels, "voxel sizes in r (comma-separated)")->capture_default_str();
+    fieldCmd->add_option("--support", field.supports, "influence radii R in r (comma-separated)")->capture_default_str();
+    fieldCmd->add_option("--methods", field.methods, "narrow-band, narrow-band-1 (one thread), gather-full, scatter, "
+                                                     "p2ls, smooth")->capture_default_str();
+    fieldCmd->add_option("--repeat", field.repeat, "runs per case (median)")->capture_default_str();
+    fieldCmd->add_option("--shared", field.shared, "../shared/data")->capture_default_str();
     bool coldAllocator = false;
     app.add_flag("--cold-allocator", coldAllocator,
                  "keep glibc's default malloc thresholds (big buffers come fresh from mmap each read)");
@@ -31,6 +41,7 @@ int main(int argc, char** argv)
     }
     try {
         if (app.got_subcommand("io")) return fluidsurf::bench::runReadBench(io);
+        if (app.got_subcommand("field")) return fluidsurf::bench::runFieldBench(field);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "fluidsurf_bench: error: %s\n", e.what());
         return 1;

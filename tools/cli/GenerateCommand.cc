@@ -25,6 +25,7 @@ Runner addGenerateCommand(CLI::App& app)
     cmd->add_option("--jitter", o->p.jitter, "slab: in-plane jitter, in lattice spacings")->capture_default_str()->check(CLI::Range(0.0, 0.49));
     cmd->add_option("--layers", o->p.layers, "slab: thickness in particles")->capture_default_str()->check(CLI::Range(1, 100000));
     cmd->add_option("--pool-depth", o->p.poolDepthScale, "drop: pool depth multiplier")->capture_default_str()->check(CLI::PositiveNumber);
+    cmd->add_option("--pool-aspect", o->p.poolAspect, "drop: pool width / depth")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
     cmd->add_option("--droplets", o->p.droplets, "drop: isolated droplets")->capture_default_str()->check(CLI::Range(0, 1000));
     cmd->footer("Example: fluidsurf generate drop --count 1000000 -r 0.01 -o drop_1M.bgeo");
     return [o]() {

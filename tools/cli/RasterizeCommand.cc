@@ -156,9 +156,10 @@ Runner addRasterizeCommand(CLI::App& app)
                 double fieldSeconds = 0;
                 for (const StageTime& st : s.stages)
                     if (st.name == "field") fieldSeconds = st.seconds;
-                std::printf("  field evaluations %zu (%.1f M/s), band half width %g r, voxel %g r\n",
+                std::printf("  field evaluations %zu (%.1f M/s; %zu of them completing the band), band half "
+                            "width %g r, voxel %g r\n",
                             s.fieldEvaluations, s.fieldEvaluations / std::max(1e-9, fieldSeconds) * 1e-6,
-                            s.bandWidth / radius, o->voxel);
+                            s.bandCompletion, s.bandWidth / radius, o->voxel);
                 std::printf("  peak memory %.1f MiB\n", peakRssMiB());
             }
         }

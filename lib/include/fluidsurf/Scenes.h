@@ -6,8 +6,8 @@
 //   block   n x n x n lattice cube, corner at the origin (n = round(cbrt(count)))
 //   ball    lattice points within rho spacings of the origin (rho from count)
 //   slab    a flat lattice slab `layers` particles thick, jittered in-plane by `jitter` spacings
-//   drop    a ball falling into a pool (a block poolDepthScale times as deep) plus a few
-//           isolated droplets
+//   drop    a ball falling into a pool (W x W x W/poolAspect, times poolDepthScale in depth,
+//           at least 3 layers) plus a few isolated droplets
 #pragma once
 
 #include <fluidsurf/ParticleSet.h>
@@ -27,7 +27,8 @@ struct SceneParams
     uint64_t seed = 1;           ///< jitter / droplet placement seed
     double jitter = 0.05;        ///< slab: in-plane jitter amplitude, in lattice spacings
     int layers = 4;              ///< slab: thickness in particles
-    double poolDepthScale = 1.0; ///< drop: pool depth multiplier (same surface, more interior)
+    double poolDepthScale = 1.0; ///< drop: pool depth multiplier (more interior)
+    double poolAspect = 4.0;     ///< drop: pool width / depth (48: side walls ~4% of the surface)
     int droplets = 5;            ///< drop: isolated single particles
 };
 

@@ -79,6 +79,7 @@ ParticleSet generateScene(Scene scene, const SceneParams& p)
     if (p.layers < 1) throw ValueError("slab layers must be >= 1");
     if (!(p.jitter >= 0 && p.jitter < 0.5)) throw ValueError("slab jitter must be in [0, 0.5) spacings");
     if (!(p.poolDepthScale > 0)) throw ValueError("pool depth scale must be positive");
+    if (!(p.poolAspect >= 1 && p.poolAspect <= 1000)) throw ValueError("pool aspect must be in [1, 1000]");
     if (p.droplets < 0 || p.droplets > 1000) throw ValueError("droplets must be 0..1000");
     Builder b;
     b.spacing = 2.0 * p.radius;
@@ -105,9 +106,13 @@ ParticleSet generateScene(Scene scene, const SceneParams& p)
         break;
     }
     case Scene::Drop: {
-        // Pool: W x W x D with D = W/4 (times the depth scale); 85% of the particles.
-        const int w = std::max(4, int(std::lround(std::cbrt(0.85 * n * 4.0))));
-        const int d = std::max(1, int(std::lround(w / 4.0 * p.poolDepthScale)));
+        // Pool: W x W x D with D = W / poolAspect (times the depth scale); 85% of the particles.
+        // A wide pool (aspect 48) has side walls ~4% of its surface, so a deeper one adds
+        // volume, not surface: what the narrow band's scaling is measured with.
+        const double aspect = p.poolAspect;
+        int w = std::max(4, int(std::lround(std::cbrt(0.85 * n * aspect))));
+        if (w / aspect < 3) w = std::max(4, int(std::lround(std::sqrt(0.85 * n / 3))));  // >= 3 layers
+        const int d = std::max(1, int(std::lround(std::max(3.0, w / aspect) * p.poolDepthScale)));
         addBlock(b, w, w, d, 0, 0, 0);
         // Ball above the middle of the pool, 15% of the particles, a few radii of air between.
         const double rho = std::max(1.0, std::cbrt(3.0 * 0.15 * n / (4.0 * M_PI)));

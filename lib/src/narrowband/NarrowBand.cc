@@ -39,9 +39,11 @@ struct BandBuilder
         for (size_t s = r.begin(); s != r.end(); ++s) {
             const Vec3f& p = particles.positions[seeds[s]];
             int lo[3], hi[3];
+            // Vertices within the width, inclusive up to 1e-6 voxel: a lattice particle exactly
+            // 2r from a vertex must not fall in or out by the rounding of its float position.
             for (int a = 0; a < 3; ++a) {
-                lo[a] = int(std::ceil((p[a] - width) * invDx));
-                hi[a] = int(std::floor((p[a] + width) * invDx));
+                lo[a] = int(std::ceil((p[a] - width) * invDx - 1e-6));
+                hi[a] = int(std::floor((p[a] + width) * invDx + 1e-6));
             }
             openvdb::Coord ijk;
             for (ijk[0] = lo[0]; ijk[0] <= hi[0]; ++ijk[0])

@@ -105,3 +105,34 @@ TEST(Methods, OutputIsByteIdenticalWithOneAndTwoThreads)
     EXPECT_GT(one.size(), 10000u);
     EXPECT_TRUE(one == two) << "the .vdb differs between 1 and 2 threads";
 }
+
+// Work and memory follow the surface: a deeper wide pool (same surface but for its side walls,
+// ~4% of it at aspect 48) barely changes the band, while the volume grows with the depth.
+TEST(Methods, BandFollowsTheSurfaceNotTheVolume)
+{
+    size_t voxels[2], volume[2];
+    for (int i = 0; i < 2; ++i) {
+        SceneParams sp;
+        sp.count = 300000;
+        sp.poolDepthScale = 1 + i;
+        sp.poolAspect = 48;
+        const ParticleSet ps = generateScene(Scene::Drop, sp);
+        const RasterizeResult res = rasterizeParticles(ps, Params::fromRadius(sp.radius));
+        voxels[i] = res.stats.activeVoxels;
+        volume[i] = ps.size();
+    }
+    EXPECT_GT(volume[1], volume[0] * 17 / 10) << "the deeper pool holds many more particles";
+    EXPECT_LT(double(voxels[1]) / double(voxels[0]), 1.05) << voxels[0] << " -> " << voxels[1];
+
+    // One particle 1000 r away: isolated, left out, and the grid is the same.
+    SceneParams sp;
+    sp.count = 20000;
+    ParticleSet ps = generateScene(Scene::Drop, sp);
+    const RasterizeResult before = rasterizeParticles(ps, Params::fromRadius(sp.radius));
+    ps.positions.push_back(Vec3f(float(1000 * sp.radius), 0.f, 0.f));
+    ps.attributes.clear();
+    const RasterizeResult after = rasterizeParticles(ps, Params::fromRadius(sp.radius));
+    EXPECT_EQ(after.stats.activeVoxels, before.stats.activeVoxels);
+    EXPECT_EQ(after.grid->tree().leafCount(), before.grid->tree().leafCount());
+    EXPECT_EQ(after.isolatedParticles.back(), ps.size() - 1);
+}

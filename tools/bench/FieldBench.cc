@@ -1,0 +1,171 @@
+// FieldBench.cc - `fluidsurf_bench field`: the rasterize pipeline per stage, against the thesis'
+// baselines (gather-full, scatter), one thread, and OpenVDB's rasterizers, on the real frames
+// and generated 1M/4M scenes. One Markdown row per case (median of --repeat runs).
+#include "Bench.h"
+#include "OpenVdbBaselines.h"
+
+#include <fluidsurf/Rasterize.h>
+#include <fluidsurf/Scenes.h>
+#include <fluidsurf/io/ParticleIO.h>
+
+#include <tbb/global_control.h>
+
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace fluidsurf {
+namespace bench {
+
+namespace {
+struct Case
+{
+    std::string name;
+    ParticleSet particles;
+    double radius;
+};
+
+void resetPeakRss()
+{
+    std::ofstream f("/proc/self/clear_refs");
+    f << "5";
+}
+
+std::vector<std::string> split(const std::string& s)
+{
+    std::vector<std::string> out;
+    std::stringstream ss(s);
+    for (std::string item; std::getline(ss, item, ',');)
+        if (!item.empty()) out.push_back(item);
+    return out;
+}
+
+std::vector<Case> loadCases(const FieldBenchOptions& o)
+{
+    std::vector<Case> cases;
+    for (const std::string& name : split(o.scenes)) {
+        if (name == "real") {
+            const char* files[] = {"double_dam_break_frame_26_4732_particles.vtk", "dam_break_frame_9_6859_particles.bgeo",
+                                   "dam_break_frame_23_24389_particles.bgeo", "hilbert_46843_particles.bgeo",
+                                   "bunny_frame_14_7705_particles.vtk", "cube_2366_particles.vtk"};
+            for (const char* f : files) {
+                const std::string path = o.shared + "/real/" + f;
+                std::ifstream probe(path);
+                if (!probe) continue;
+                cases.push_back({std::string(f).substr(0, std::string(f).find("_particles")), io::readParticles(path), 0.025});
+            }
+            continue;
+        }
+        if (name.rfind("hilbert", 0) == 0) {
+            cases.push_back({"hilbert_46843", io::readParticles(o.shared + "/real/hilbert_46843_particles.bgeo"), 0.025});
+            continue;
+        }
+        // drop-1M, block-4M, ...: generated, r = 0.025
+        const size_t dash = name.find('-');
+        if (dash == std::string::npos) throw std::runtime_error("unknown scene '" + name + "'");
+        SceneParams sp;
+        sp.count = size_t(std::stod(name.substr(dash + 1)) * (name.back() == 'M' ? 1e6 : name.back() == 'k' ? 1e3 : 1));
+        cases.push_back({name, generateScene(sceneFromName(name.substr(0, dash)), sp), sp.radius});
+    }
+    return cases;
+}
+
+struct Row
+{
+    std::string scene, method;
+    size_t particles = 0;
+    double voxel = 0, support = 0;
+    int threads = 0;
+    double median = 0, peak = 0, evalRate = 0;
+    size_t evaluations = 0, activeVoxels = 0;
+    std::map<std::string, double> stages;
+};
+
+Row runOurs(const Case& c, const Params& p, int threads, int repeat, const std::string& label)
+{
+    Row row{c.name, label, c.particles.size(), p.voxelSize / c.radius, p.influenceRadius / c.radius, threads};
+    std::vector<double> totals;
+    std::map<std::string, std::vector<double>> stages;
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    resetPeakRss();
+    for (int k = 0; k < repeat; ++k) {
+        const RasterizeResult r = rasterizeParticles(c.particles, p);
+        totals.push_back(r.stats.totalSeconds());
+        for (const StageTime& s : r.stats.stages) stages[s.name].push_back(s.seconds);
+        row.evaluations = r.stats.fieldEvaluations;
+        row.activeVoxels = r.stats.activeVoxels;
+    }
+    row.peak = peakRssMiB();
+    row.median = median(totals);
+    for (auto& [name, v] : stages) row.stages[name] = median(v);
+    row.evalRate = row.evaluations / row.median * 1e-6;
+    return row;
+}
+
+void printRow(const Row& r, double reference)
+{
+    std::string stages;
+    for (const char* s : {"neighbors", "classify", "narrow band", "bounding volume", "field", "complete band", "level set"}) {
+        auto it = r.stages.find(s);
+        if (it == r.stages.end()) continue;
+        char buf[64];
+        std::snprintf(buf, sizeof(buf), "%s%.3f", stages.empty() ? "" : " / ", it->second);
+        stages += buf;
+    }
+    std::printf("| %s | %zu | %g r | %g r | %s | %d | %.3f | %s | %zu | %.1f | %zu | %.0f | %.2fx |\n", r.scene.c_str(),
+                r.particles, r.voxel, r.support, r.method.c_str(), r.threads, r.median, stages.c_str(), r.evaluations,
+                r.evalRate, r.activeVoxels, r.peak, reference > 0 ? r.median / reference : 1.0);
+    std::fflush(stdout);
+}
+} // namespace
+
+int runFieldBench(const FieldBenchOptions& o)
+{
+    const int hw = int(tbb::info::default_concurrency());
+    std::printf("fluidsurf_bench field: %d hardware threads; seconds are medians of %d runs; stages: %s\n\n", hw, o.repeat,
+                "neighbors / classify / narrow band (or bounding volume) / field / complete band / level set");
+    std::printf("| scene | particles | voxel | R | method | threads | field stage s | stages s | evaluations | M evals/s "
+                "| active voxels | peak RSS MiB | time / narrow band |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    const std::vector<std::string> methods = split(o.methods);
+    for (const Case& c : loadCases(o))
+        for (const std::string& v : split(o.voxels))
+            for (const std::string& s : split(o.supports)) {
+                Params p = Params::fromRadius(c.radius);
+                p.voxelSize = std::stod(v) * c.radius;
+                p.influenceRadius = std::stod(s) * c.radius;
+                double reference = 0;
+                for (const std::string& m : methods) {
+                    if (m == "narrow-band" || m == "narrow-band-1") {
+                        p.method = FieldMethod::NarrowBand;
+                        const Row r = runOurs(c, p, m == "narrow-band" ? hw : 1, o.repeat, "narrow band");
+                        if (m == "narrow-band") reference = r.median;
+                        printRow(r, reference);
+                    } else if (m == "gather-full" || m == "scatter") {
+                        p.method = methodFromName(m);
+                        printRow(runOurs(c, p, m == "scatter" ? 1 : hw, std::max(1, o.repeat / 2), m), reference);
+                    } else if (m == "p2ls" || m == "smooth") {
+                        std::vector<double> t, setup;
+                        BaselineResult b;
+                        resetPeakRss();
+                        for (int k = 0; k < std::max(1, o.repeat / 2); ++k) {
+                            b = m == "p2ls" ? runParticlesToLevelSet(c.particles, c.radius, p.voxelSize)
+                                            : runSmoothSpheres(c.particles, c.radius, p.influenceRadius, p.voxelSize);
+                            t.push_back(b.seconds), setup.push_back(b.setupSeconds);
+                        }
+                        Row r{c.name, m == "p2ls" ? "OpenVDB ParticlesToLevelSet" : "OpenVDB rasterizeSmoothSpheres",
+                              c.particles.size(), p.voxelSize / c.radius, p.influenceRadius / c.radius, hw};
+                        r.median = median(t);
+                        if (m == "smooth") r.stages["neighbors"] = median(setup);  // PointDataGrid build
+                        r.activeVoxels = b.activeVoxels;
+                        r.peak = peakRssMiB();
+                        printRow(r, reference);
+                    } else {
+                        throw std::runtime_error("unknown method '" + m + "'");
+                    }
+                }
+            }
+    return 0;
+}
+
+} // namespace bench
+} // namespace fluidsurf
