@@ -87,7 +87,7 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
     for (float r : radii) maxRadius = std::max(maxRadius, r);
     stats.bandWidth = narrowband::effectiveBandWidth(params, maxRadius);
     if (params.method == FieldMethod::NarrowBand) {
-        const openvdb::MaskTree::Ptr band = narrowband::buildNarrowBand(index, classes, params);
+        const openvdb::MaskTree::Ptr band = narrowband::buildNarrowBand(index, classes, params, stats.bandWidth);
         tree = std::make_shared<openvdb::FloatTree>(*band, background, openvdb::TopologyCopy());
         clock.done("narrow band");
     }

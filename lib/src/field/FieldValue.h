@@ -13,6 +13,8 @@
 // eigenproblem in double precision; the CUDA backend must use the same.
 #pragma once
 
+#include "util/Lanes.h"
+
 #include <fluidsurf/Params.h>
 
 #include <algorithm>
@@ -29,6 +31,53 @@ struct FieldSums
     double g[3] = {0, 0, 0};
     double m[6] = {0, 0, 0, 0, 0, 0};  ///< xx, xy, xz, yy, yz, zz
 };
+
+/// The same sums while they are accumulated, in float (scatter: one vertex) or in
+/// util::Lanes (gather: independent per-lane partial sums).
+template <typename T>
+struct PartialSums
+{
+    T w{}, d0{}, d1{}, d2{}, r{}, g0{}, g1{}, g2{}, m0{}, m1{}, m2{}, m3{}, m4{}, m5{};
+};
+
+/// Add particle j at d = (ex, ey, ez) from the vertex, s2 = |d|^2 / R^2 (rj: its radius, used
+/// with Radii). Particles at s2 >= 1 add exactly zero. The one place the kernel is written.
+template <bool Ssp07, bool Radii, typename T>
+inline void addParticle(PartialSums<T>& a, T ex, T ey, T ez, T s2, T rj)
+{
+    T t = 1.f - s2;
+    t = t > 0.f ? t : 0.f;
+    const T t2 = t * t, wt = t2 * t;
+    a.w += wt;
+    a.d0 += wt * ex, a.d1 += wt * ey, a.d2 += wt * ez;
+    if (Radii) a.r += wt * rj;
+    if (Ssp07) {
+        const T gx = t2 * ex, gy = t2 * ey, gz = t2 * ez;
+        a.g0 += gx, a.g1 += gy, a.g2 += gz;
+        a.m0 += gx * ex, a.m1 += gx * ey, a.m2 += gx * ez;
+        a.m3 += gy * ey, a.m4 += gy * ez, a.m5 += gz * ez;
+    }
+}
+
+inline double laneSum(float v) { return v; }
+inline double laneSum(const util::Lanes& v)
+{
+    double s = 0;
+    for (int l = 0; l < util::kLanes; ++l) s += v[l];  // fixed order: deterministic
+    return s;
+}
+
+template <typename T>
+FieldSums toFieldSums(const PartialSums<T>& a)
+{
+    FieldSums s;
+    s.w = laneSum(a.w), s.r = laneSum(a.r);
+    s.d[0] = laneSum(a.d0), s.d[1] = laneSum(a.d1), s.d[2] = laneSum(a.d2);
+    s.g[0] = laneSum(a.g0), s.g[1] = laneSum(a.g1), s.g[2] = laneSum(a.g2);
+    s.m[0] = laneSum(a.m0), s.m[1] = laneSum(a.m1), s.m[2] = laneSum(a.m2);
+    s.m[3] = laneSum(a.m3), s.m[4] = laneSum(a.m4), s.m[5] = laneSum(a.m5);
+    return s;
+}
 
 struct FieldConstants
 {

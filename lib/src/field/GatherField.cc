@@ -113,36 +113,14 @@ struct Kernel
     FieldSums sums(const Scratch& s, uint32_t b, uint32_t e, float vx, float vy, float vz) const
     {
         const float invR2 = float(1 / (R * R));
-        Lanes w{}, d0{}, d1{}, d2{}, rs{}, g0{}, g1{}, g2{}, m0{}, m1{}, m2{}, m3{}, m4{}, m5{};
+        PartialSums<Lanes> acc;
         const float *X = s.rx.data(), *Y = s.ry.data(), *Z = s.rz.data(), *Rr = s.rr.data();
         for (uint32_t j = b; j < e; j += kLanes) {
             const Lanes ex = load(X + j) - vx, ey = load(Y + j) - vy, ez = load(Z + j) - vz;
             const Lanes s2 = (ex * ex + ey * ey + ez * ez) * invR2;
-            Lanes t = 1.f - s2;
-            t = t > 0.f ? t : 0.f;
-            const Lanes t2 = t * t, wt = t2 * t;
-            w += wt;
-            d0 += wt * ex, d1 += wt * ey, d2 += wt * ez;
-            if (Radii) rs += wt * load(Rr + j);
-            if (Ssp07) {
-                const Lanes gx = t2 * ex, gy = t2 * ey, gz = t2 * ez;
-                g0 += gx, g1 += gy, g2 += gz;
-                m0 += gx * ex, m1 += gx * ey, m2 += gx * ez;
-                m3 += gy * ey, m4 += gy * ez, m5 += gz * ez;
-            }
+            addParticle<Ssp07, Radii>(acc, ex, ey, ez, s2, Radii ? load(Rr + j) : Lanes{});
         }
-        FieldSums out;
-        for (int l = 0; l < kLanes; ++l) {
-            out.w += w[l];
-            out.d[0] += d0[l], out.d[1] += d1[l], out.d[2] += d2[l];
-            out.r += rs[l];
-            if (Ssp07) {
-                out.g[0] += g0[l], out.g[1] += g1[l], out.g[2] += g2[l];
-                out.m[0] += m0[l], out.m[1] += m1[l], out.m[2] += m2[l];
-                out.m[3] += m3[l], out.m[4] += m4[l], out.m[5] += m5[l];
-            }
-        }
-        return out;
+        return toFieldSums(acc);
     }
 
     size_t leaf(LeafT& leaf, Scratch& s) const

@@ -56,17 +56,15 @@ struct BandBuilder
 } // namespace
 
 openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
-                                       const classify::Classification& classes, const Params& params)
+                                       const classify::Classification& classes, const Params& params,
+                                       double width)
 {
     std::vector<uint32_t> seeds;
-    float maxRadius = float(params.radius);
     for (size_t i = 0; i < classes.classes.size(); ++i)
         if (classify::isSurface(classes.classes[i]) ||
-            (params.keepIsolated && classes.classes[i] == classify::Isolated)) {
+            (params.keepIsolated && classes.classes[i] == classify::Isolated))
             seeds.push_back(uint32_t(i));
-            if (!particles.radii.empty()) maxRadius = std::max(maxRadius, particles.radii[i]);
-        }
-    BandBuilder builder(particles, seeds, effectiveBandWidth(params, maxRadius), 1 / params.voxelSize);
+    BandBuilder builder(particles, seeds, width, 1 / params.voxelSize);
     tbb::parallel_reduce(tbb::blocked_range<size_t>(0, seeds.size(), 256), builder);
     return builder.tree;
 }

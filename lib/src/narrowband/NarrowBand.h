@@ -22,10 +22,11 @@ namespace narrowband {
 /// The half width w used for particles of radius up to maxRadius.
 double effectiveBandWidth(const Params& params, double maxRadius);
 
-/// Active voxels within +-w of the surface and splash particles, and of isolated ones with
-/// params.keepIsolated (parallel, deterministic).
+/// Active voxels within +-width of the surface and splash particles, and of isolated ones with
+/// params.keepIsolated (parallel, deterministic). width comes from effectiveBandWidth.
 openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
-                                       const classify::Classification& classes, const Params& params);
+                                       const classify::Classification& classes, const Params& params,
+                                       double width);
 
 /// Index box of every vertex within R of the particles' bounding box (the "bounding volume").
 openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const Params& params);
