@@ -46,6 +46,9 @@ void Params::validate() const
     // the particles only multiplies work and memory without adding detail.
     if (voxelSize < radius / 64)
         throw ValueError("voxel size below r/64 is not supported (got " + std::to_string(voxelSize / radius) + " r)");
+    if (influenceRadius > 1000 * voxelSize)
+        throw ValueError("influence radius above 1000 voxels is not supported (got " +
+                         std::to_string(influenceRadius / voxelSize) + " voxels)");
 }
 
 const char* fieldName(FieldKind f) { return f == FieldKind::Ssp07 ? "ssp07" : "zb05"; }

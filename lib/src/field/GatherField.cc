@@ -27,16 +27,25 @@ using LeafT = openvdb::FloatTree::LeafNodeType;
 
 inline Lanes load(const float* p) { return util::loadLanes(p); }
 
-/// Particles near one leaf, in leaf-local coordinates, bucketed by z-slab; and the subset of
-/// one voxel row. Reused from leaf to leaf by one task.
+// floor for values well inside the int range; std::floor is a libm call on baseline x86-64.
+inline int floorInt(double v)
+{
+    const int i = int(v);
+    return i - (v < i);
+}
+
+/// Particles near one leaf, in leaf-local coordinates, counting-sorted into columns (bins in x
+/// and y); and the subset of one voxel row, sorted by z-slab. Reused from leaf to leaf by one task.
 struct Scratch
 {
-    std::vector<float> x, y, z, r;            // gathered, unsorted
-    std::vector<int> slab;
-    std::vector<float> sx, sy, sz, sr;        // sorted by slab
-    std::vector<uint32_t> slabStart;
-    std::vector<float> rx, ry, rz, rr;        // one row, by slab, padded with kLanes far particles
-    std::vector<uint32_t> rowSlabStart;
+    std::vector<float> x, y, z, r;            // gathered, in cell order
+    std::vector<uint32_t> column;
+    std::vector<float> sx, sy, sz, sr;        // sorted by column
+    std::vector<uint16_t> slab;               //   and each one's z-slab
+    std::vector<uint32_t> columnStart;
+    std::vector<uint32_t> picked;             // one row, in column order
+    std::vector<float> rx, ry, rz, rr;        // one row, by z-slab, padded with kLanes far particles
+    std::vector<uint32_t> rowSlabStart, cursor;
 };
 
 struct Kernel
@@ -44,19 +53,31 @@ struct Kernel
     const neighbors::CellIndex& particles;
     FieldConstants constants;
     double dx, R;
-    int slabReach;  // slabs of width dx within R of a voxel on either side
+    int reach;     // slabs of width dx within R of a voxel on either side
     bool radii;
+    int binSlabs;  // columns are this many slabs wide in x and y (few columns for large R)
+    double invDx = 1 / dx, invBinSlabs = 1.0 / binSlabs;
 
-    int slabCount() const { return LeafT::DIM + 2 * slabReach; }
+    // Slabs per axis: the leaf's voxels and reach more on either side (at most 65535: uint16_t).
+    int slabCount() const { return LeafT::DIM + 2 * reach; }
+    int slabOf(double local) const { return std::clamp(floorInt(local * invDx) + reach, 0, slabCount() - 1); }
+    int binCount() const { return (slabCount() + binSlabs - 1) / binSlabs; }
+    int binOf(double local) const
+    {
+        return std::clamp(floorInt((local * invDx + reach) * invBinSlabs), 0, binCount() - 1);
+    }
 
-    // Gather the particles within R of the leaf's voxel box, relative to the leaf origin.
+    // Gather the particles within R of the leaf's voxel box, relative to the leaf origin, and
+    // sort them by column. A row then reads only the columns near its (x, y) line instead of
+    // testing every particle of the leaf (that test was most of the field stage in thin bands).
     void gather(const openvdb::Coord& origin, Scratch& s) const
     {
         const double o[3] = {origin.x() * dx, origin.y() * dx, origin.z() * dx};
         const double extent = (LeafT::DIM - 1) * dx;
         double lo[3], hi[3];
         for (int a = 0; a < 3; ++a) lo[a] = o[a] - R, hi[a] = o[a] + extent + R;
-        s.x.clear(), s.y.clear(), s.z.clear(), s.r.clear(), s.slab.clear();
+        s.x.clear(), s.y.clear(), s.z.clear(), s.r.clear(), s.column.clear();
+        const int B = binCount();
         particles.forEachCellInBox(lo, hi, [&](uint32_t b, uint32_t e) {
             for (uint32_t i = b; i < e; ++i) {
                 const Vec3f& p = particles.positions[i];
@@ -66,44 +87,60 @@ struct Kernel
                 s.y.push_back(float(ly));
                 s.z.push_back(float(lz));
                 if (radii) s.r.push_back(particles.radii[i]);
-                s.slab.push_back(std::clamp(int(std::floor(lz / dx)) + slabReach, 0, slabCount() - 1));
+                s.column.push_back(uint32_t(binOf(lx) * B + binOf(ly)));
             }
         });
-        // Counting sort by slab (stable: the order stays the cell order, deterministic).
-        const int slabs = slabCount();
-        s.slabStart.assign(slabs + 1, 0);
-        for (int b : s.slab) ++s.slabStart[b + 1];
-        for (int b = 0; b < slabs; ++b) s.slabStart[b + 1] += s.slabStart[b];
+        // Counting sort by column (stable: within a column the order stays the cell order).
+        const size_t columns = size_t(B) * B;
+        s.columnStart.assign(columns + 1, 0);
+        for (uint32_t c : s.column) ++s.columnStart[c + 1];
+        for (size_t c = 0; c < columns; ++c) s.columnStart[c + 1] += s.columnStart[c];
         const size_t n = s.x.size();
-        s.sx.resize(n), s.sy.resize(n), s.sz.resize(n), s.sr.resize(radii ? n : 0);
-        std::vector<uint32_t>& next = s.rowSlabStart;  // borrowed as the fill cursor
-        next.assign(s.slabStart.begin(), s.slabStart.end());
+        s.sx.resize(n), s.sy.resize(n), s.sz.resize(n), s.sr.resize(radii ? n : 0), s.slab.resize(n);
+        s.picked.assign(s.columnStart.begin(), s.columnStart.end());  // borrowed as fill cursors
         for (size_t i = 0; i < n; ++i) {
-            const uint32_t at = next[s.slab[i]]++;
+            const uint32_t at = s.picked[s.column[i]]++;
             s.sx[at] = s.x[i], s.sy[at] = s.y[i], s.sz[at] = s.z[i];
+            s.slab[at] = uint16_t(slabOf(s.z[i]));
             if (radii) s.sr[at] = s.r[i];
         }
+        s.picked.resize(n);
+        s.rx.resize(n + kLanes), s.ry.resize(n + kLanes), s.rz.resize(n + kLanes), s.rr.resize(radii ? n + kLanes : 0);
     }
 
-    // The particles within R of the row's (x, y) line, still by slab.
-    void selectRow(float vx, float vy, Scratch& s) const
+    // The particles within R of the row's (x, y) line, by z-slab. For every x-column within R
+    // the y-columns that can hold such particles are one contiguous run; each particle is still
+    // tested, and the picked ones are counting-sorted by z-slab (stable, so deterministic).
+    void selectRow(int i, int j, Scratch& s) const
     {
-        const float R2 = float(R * R);
-        s.rx.clear(), s.ry.clear(), s.rz.clear(), s.rr.clear();
-        const int slabs = slabCount();
-        s.rowSlabStart.assign(slabs + 1, 0);
-        for (int b = 0; b < slabs; ++b) {
-            for (uint32_t i = s.slabStart[b]; i < s.slabStart[b + 1]; ++i) {
-                const float ex = s.sx[i] - vx, ey = s.sy[i] - vy;
+        const double vx = i * dx, vy = j * dx;
+        const float fx = float(vx), fy = float(vy), R2 = float(R * R);
+        const int S = slabCount(), B = binCount();
+        uint32_t n = 0;
+        s.rowSlabStart.assign(S + 1, 0);
+        for (int xb = binOf(vx - R), xe = binOf(vx + R); xb <= xe; ++xb) {
+            // Distance from vx to the column's x range [(xb q - reach) dx, ((xb + 1) q - reach) dx).
+            const double gap = std::max({0.0, (xb * binSlabs - reach) * dx - vx, vx - ((xb + 1) * binSlabs - reach) * dx});
+            if (gap >= R) continue;
+            const double w = std::sqrt(R * R - gap * gap) + 1e-4 * dx;
+            const uint32_t b = s.columnStart[xb * B + binOf(vy - w)], e = s.columnStart[xb * B + binOf(vy + w) + 1];
+            for (uint32_t p = b; p < e; ++p) {
+                const float ex = s.sx[p] - fx, ey = s.sy[p] - fy;
                 if (ex * ex + ey * ey >= R2) continue;
-                s.rx.push_back(s.sx[i]), s.ry.push_back(s.sy[i]), s.rz.push_back(s.sz[i]);
-                if (radii) s.rr.push_back(s.sr[i]);
+                s.picked[n++] = p;
+                ++s.rowSlabStart[s.slab[p] + 1];
             }
-            s.rowSlabStart[b + 1] = uint32_t(s.rx.size());
+        }
+        for (int z = 0; z < S; ++z) s.rowSlabStart[z + 1] += s.rowSlabStart[z];
+        s.cursor.assign(s.rowSlabStart.begin(), s.rowSlabStart.end() - 1);
+        for (uint32_t q = 0; q < n; ++q) {
+            const uint32_t p = s.picked[q], at = s.cursor[s.slab[p]]++;
+            s.rx[at] = s.sx[p], s.ry[at] = s.sy[p], s.rz[at] = s.sz[p];
+            if (radii) s.rr[at] = s.sr[p];
         }
         for (int l = 0; l < kLanes; ++l) {
-            s.rx.push_back(kFar), s.ry.push_back(kFar), s.rz.push_back(kFar);
-            if (radii) s.rr.push_back(0);
+            s.rx[n + l] = s.ry[n + l] = s.rz[n + l] = kFar;
+            if (radii) s.rr[n + l] = 0;
         }
     }
 
@@ -135,10 +172,10 @@ struct Kernel
                 for (int k = 0; k < int(LeafT::DIM); ++k) any |= mask.isOn(rowOffset + k);
                 if (!any) continue;
                 const float vx = float(i * dx), vy = float(j * dx);
-                selectRow(vx, vy, s);
+                selectRow(i, j, s);
                 for (int k = 0; k < int(LeafT::DIM); ++k) {
                     if (!mask.isOn(rowOffset + k)) continue;
-                    const uint32_t b = s.rowSlabStart[k], e = s.rowSlabStart[k + 2 * slabReach + 1];
+                    const uint32_t b = s.rowSlabStart[k], e = s.rowSlabStart[k + 2 * reach + 1];
                     const float vz = float(k * dx);
                     FieldSums sum;
                     if (constants.ssp07)
@@ -158,8 +195,10 @@ struct Kernel
 size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles, const Params& params)
 {
     const bool radii = !particles.radii.empty();
+    const int reach = int(std::ceil(params.influenceRadius / params.voxelSize));
+    const int slabs = int(LeafT::DIM) + 2 * reach;
     Kernel kernel{particles, FieldConstants::from(params, radii), params.voxelSize, params.influenceRadius,
-                  int(std::ceil(params.influenceRadius / params.voxelSize)), radii};
+                  reach, radii, (slabs + 15) / 16};  // at most 16 x 16 columns
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
     std::atomic<size_t> evaluations{0};
     tbb::parallel_for(leaves.leafRange(1), [&](const openvdb::tree::LeafManager<openvdb::FloatTree>::LeafRange& range) {

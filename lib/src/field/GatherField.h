@@ -3,7 +3,8 @@
 // layer forms, thesis Fig. 4.2) and stores phi (FieldValue.h).
 //
 // Parallel over VDB leaves with TBB. Each leaf gathers its neighbourhood from the cell index once
-// (the particles within R of the leaf's 8^3 voxels), sorts it into z-slabs of one voxel, and then
+// (the particles within R of the leaf's 8^3 voxels), sorts it into bins (z-slabs of one voxel,
+// split by x and y), and then
 // walks its voxel rows along z: a row keeps the particles within R of its (x, y) line, and a voxel
 // reads the slabs within R of its z. The per-voxel sum has a fixed order and fixed lanes, so the
 // output is bitwise identical for any thread count, and the same for the narrow band and for
