@@ -71,6 +71,9 @@ TEST(LevelSet, InvalidParametersAreRejected)
     p = Params::fromRadius(sp.radius);
     p.voxelSize = 0;
     EXPECT_THROW(rasterizeParticles(ps, p), ValueError);
+    p = Params::fromRadius(sp.radius);
+    p.voxelSize = sp.radius / 32, p.influenceRadius = 1001 * p.voxelSize;  // a huge kernel
+    EXPECT_THROW(rasterizeParticles(ps, p), ValueError);
     ParticleSet far;
     far.positions = ps.positions;
     far.positions.push_back(Vec3f(1e12f, 0, 0));  // 2^21 cells cannot span it
