@@ -23,6 +23,29 @@ std::string sharedData();
             GTEST_SKIP() << "../shared/data is absent: real-frame test skipped";                  \
     } while (0)
 
+/// The small frames of ../shared/data/real with their particle radius (its README).
+struct RealFrame
+{
+    const char* name;
+    double radius;
+    bool fluid = true;  ///< written by a fluid simulator (not scattered points)
+};
+
+inline const RealFrame kRealFrames[] = {
+    {"double_dam_break_frame_26_4732_particles.vtk", 0.025},
+    {"dam_break_frame_9_6859_particles.bgeo", 0.025},
+    {"dam_break_frame_23_24389_particles.bgeo", 0.025},
+    {"hilbert_46843_particles.bgeo", 0.025},
+    {"bunny_frame_14_7705_particles.vtk", 0.025},
+    {"cube_2366_particles.vtk", 0.025},
+    {"free_particles_1000_particles.vtk", 0.5, false},
+    {"ParticleData_Random_1000.vtk", 0.025, false},
+    {"fluid_250_particles.vtu", 0.025},
+    {"fluid_encoded_250_particles.vtu", 0.025},
+    {"splishsplash_sphere_12394_particles.bgeo", 0.025},
+    {"splishsplash_particle_grid_400_particles.bgeo", 0.025},
+};
+
 /// A fresh folder under /tmp, removed with its content on destruction.
 class TempDir
 {

@@ -6,6 +6,7 @@
 // in double reproduces the original float exactly. Point order is not part of a VDB (points
 // are bucketed by voxel), so a round trip keeps each particle, not their order.
 #include "io/ByteReader.h"
+#include "io/VdbGrids.h"
 #include "io/Formats.h"
 
 #include <fluidsurf/Error.h>
@@ -153,13 +154,12 @@ std::string shortened(const std::string& s)
 
 } // namespace
 
-ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+openvdb::GridPtrVecPtr readVdbGrids(const uint8_t* data, size_t size, const std::string& src)
 {
     openvdb::initialize();
     if (size < 8 || !(data[0] == 0x20 && data[1] == 0x42 && data[2] == 0x44 && data[3] == 0x56))
         throw InputError(src + ": not an OpenVDB file (missing VDB magic) (at byte 0)");
     checkVdbStructure(data, size, src);
-    openvdb::GridPtrVecPtr grids;
     try {
         MemoryBuf buf(data, size);
         std::istream stream(&buf);
@@ -168,7 +168,7 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
         // why checkVdbStructure() runs first.
         stream.exceptions(std::ios::failbit | std::ios::badbit | std::ios::eofbit);
         openvdb::io::Stream vdb(stream);
-        grids = vdb.getGrids();
+        return vdb.getGrids();
     } catch (const std::ios_base::failure&) {
         throw InputError(src + ": VDB data ends early (truncated file?)");
     } catch (const std::bad_alloc&) {
@@ -176,6 +176,11 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
     } catch (const std::exception& e) {
         throw InputError(src + ": cannot read VDB: " + shortened(e.what()));
     }
+}
+
+ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+{
+    const openvdb::GridPtrVecPtr grids = readVdbGrids(data, size, src);
     openvdb::points::PointDataGrid::Ptr grid;
     std::string names;
     for (auto& g : *grids) {

@@ -15,7 +15,10 @@ namespace narrowband {
 namespace {
 constexpr int kMaxRounds = 32;
 
-/// Inactive axis neighbours of active voxels with |phi| < threshold.
+/// Inactive voxels the band needs: the axis neighbours of active voxels with |phi| < threshold
+/// (the zero crossing may lie just beyond them), and the 26 neighbours of every voxel with a sign
+/// change to an active axis neighbour (so that all 8 cells around it are complete and marching
+/// cubes closes the surface there).
 struct FrontierFinder
 {
     const openvdb::FloatTree& tree;
@@ -32,14 +35,24 @@ struct FrontierFinder
         openvdb::tree::ValueAccessor<openvdb::MaskTree> out(*front);
         for (auto leaf = range.begin(); leaf; ++leaf)
             for (auto v = leaf->cbeginValueOn(); v; ++v) {
-                if (!(std::abs(*v) < threshold)) continue;
                 const openvdb::Coord c = v.getCoord();
+                const bool in = *v < 0;
+                bool crossing = false;
                 for (int axis = 0; axis < 3; ++axis)
                     for (int step : {-1, 1}) {
                         openvdb::Coord n = c;
                         n[axis] += step;
-                        if (!acc.isValueOn(n)) out.setValueOn(n);
+                        float w;
+                        if (acc.probeValue(n, w)) crossing |= (w < 0) != in;
+                        else if (std::abs(*v) < threshold) out.setValueOn(n);
                     }
+                if (!crossing) continue;
+                for (int dx = -1; dx <= 1; ++dx)
+                    for (int dy = -1; dy <= 1; ++dy)
+                        for (int dz = -1; dz <= 1; ++dz) {
+                            const openvdb::Coord n = c.offsetBy(dx, dy, dz);
+                            if (!acc.isValueOn(n)) out.setValueOn(n);
+                        }
             }
     }
     void join(FrontierFinder& other) { front->topologyUnion(*other.front); }

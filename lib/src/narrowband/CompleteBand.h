@@ -5,8 +5,10 @@
 // gap, and the zero crossing can lie more than 2r from every surface particle: gather-full then
 // shows a sign change between a band vertex and a vertex outside the band, where Marching Cubes
 // would leave a hole. This stage grows the band there, and only there: every inactive axis
-// neighbour of an active voxel with |phi| < 0.5 voxel is activated and evaluated, repeated until
-// nothing is added (a few rounds; the cost is a tiny fraction of the band).
+// neighbour of an active voxel with |phi| < 0.5 voxel, and every inactive voxel of the 3x3x3
+// block around a voxel with a sign change to an active neighbour (marching cubes triangulates
+// only cells whose 8 corners are active), is activated and evaluated, repeated until nothing is
+// added (a few rounds; the cost is a small fraction of the band).
 #pragma once
 
 #include "neighbors/CellIndex.h"

@@ -79,27 +79,7 @@ void expectMatchesReference(const openvdb::FloatGrid& grid, const Reference& ref
     ::testing::Test::RecordProperty(what + "_worst_error_in_r", std::to_string(worst / p.radius));
 }
 
-struct Frame
-{
-    const char* name;
-    double radius;
-    bool fluid = true;  ///< written by a fluid simulator (not scattered points)
-};
-
-const Frame kRealFrames[] = {
-    {"double_dam_break_frame_26_4732_particles.vtk", 0.025},
-    {"dam_break_frame_9_6859_particles.bgeo", 0.025},
-    {"dam_break_frame_23_24389_particles.bgeo", 0.025},
-    {"hilbert_46843_particles.bgeo", 0.025},
-    {"bunny_frame_14_7705_particles.vtk", 0.025},
-    {"cube_2366_particles.vtk", 0.025},
-    {"free_particles_1000_particles.vtk", 0.5, false},
-    {"ParticleData_Random_1000.vtk", 0.025, false},
-    {"fluid_250_particles.vtu", 0.025},
-    {"fluid_encoded_250_particles.vtu", 0.025},
-    {"splishsplash_sphere_12394_particles.bgeo", 0.025},
-    {"splishsplash_particle_grid_400_particles.bgeo", 0.025},
-};
+using test::kRealFrames;
 
 /// phi at every particle centre that is part of the field (trilinear in the level set; deep
 /// inside, the sign-flood-filled background): how many lie outside, and the largest phi.
@@ -141,7 +121,7 @@ void expectParticlesInside(const openvdb::FloatGrid& grid, const ParticleSet& ps
 TEST(FieldReference, RealFramesMatchBruteForce)
 {
     FLUIDSURF_REQUIRE_SHARED_DATA();
-    for (const Frame& f : kRealFrames) {
+    for (const test::RealFrame& f : kRealFrames) {
         const ParticleSet ps = io::readParticles(sharedData() + "/real/" + f.name);
         const Params p = Params::fromRadius(f.radius);
         const RasterizeResult res = rasterizeParticles(ps, p, f.name);
@@ -159,7 +139,7 @@ TEST(FieldReference, RealFramesMatchBruteForce)
 TEST(FieldReference, RealFramesKeepTheirParticlesInside)
 {
     FLUIDSURF_REQUIRE_SHARED_DATA();
-    for (const Frame& f : kRealFrames) {
+    for (const test::RealFrame& f : kRealFrames) {
         // A sampled sphere *shell* one particle thick at 0.53 of its pscale spacing: a boundary
         // model, not a fluid body. Its particles look interior to every density test.
         if (std::string(f.name).find("splishsplash_sphere") == 0) continue;

@@ -1,0 +1,24 @@
+// MarchingCubes.h - our marching cubes over the active narrow band of a level set (see
+// fluidsurf/MeshLevelSet.h for what it guarantees).
+//
+// Three passes over the VDB leaves, each parallel (TBB) and written per leaf, so the output does
+// not depend on the thread count:
+//  1. crossing edges: for every active voxel, which of its +x/+y/+z edges (to an active
+//     neighbour) change sign; counted per leaf, prefix-summed into vertex numbers;
+//  2. one vertex per crossing edge (linear interpolation, normal from the gradient), its number
+//     stored in an index tree with the band's topology so any cell can find it;
+//  3. triangles: every cell whose 8 corners are active and whose signs differ. Its polygons are
+//     traced from face segments (ambiguous faces by the bilinear saddle value) and fanned (around
+//     a centre vertex in cells with an ambiguous face).
+// Vertices no complete cell uses (edges at the band's rim) are dropped at the end.
+#pragma once
+
+#include <fluidsurf/MeshLevelSet.h>
+
+namespace fluidsurf {
+namespace mesh {
+
+TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, MeshStats* stats);
+
+} // namespace mesh
+} // namespace fluidsurf
