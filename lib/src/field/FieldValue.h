@@ -45,8 +45,11 @@ struct PartialSums
 template <bool Ssp07, bool Radii, typename T>
 inline void addParticle(PartialSums<T>& a, T ex, T ey, T ez, T s2, T rj)
 {
+    // Particles within float rounding of R (t <= 1e-6, w <= 1e-18) count as outside: a lattice
+    // particle exactly R away must not decide, by the rounding of leaf-local coordinates, whether
+    // a vertex has a neighbour at all (phi jumps from the background to |x - p| - r there).
     T t = 1.f - s2;
-    t = t > 0.f ? t : 0.f;
+    t = t > 1e-6f ? t : 0.f;
     const T t2 = t * t, wt = t2 * t;
     a.w += wt;
     a.d0 += wt * ex, a.d1 += wt * ey, a.d2 += wt * ez;
