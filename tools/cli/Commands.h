@@ -16,6 +16,8 @@ Runner addInfoCommand(CLI::App& app);
 Runner addConvertCommand(CLI::App& app);
 Runner addGenerateCommand(CLI::App& app);
 Runner addRasterizeCommand(CLI::App& app);
+Runner addMeshCommand(CLI::App& app);
+Runner addReconstructCommand(CLI::App& app);
 
 } // namespace cli
 } // namespace fluidsurf

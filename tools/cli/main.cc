@@ -20,6 +20,8 @@ int main(int argc, char** argv)
   fluidsurf convert 'sim/f_{:04}.bgeo' 'out/f_{:04}.ply' --frames 1-100
   fluidsurf generate drop --count 100000 -o drop.bgeo
   fluidsurf rasterize frame.bgeo -r 0.025 -o frame.vdb   narrow-band level set
+  fluidsurf mesh frame.vdb -o frame.obj                  level set to mesh
+  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj particles to mesh
 
 Frame sequences: {:04}, #### or %04d in a file name; --frames A-B picks frames,
 otherwise every matching file on disk is used.
@@ -28,6 +30,8 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
     const cli::Runner convert = cli::addConvertCommand(app);
     const cli::Runner generate = cli::addGenerateCommand(app);
     const cli::Runner rasterize = cli::addRasterizeCommand(app);
+    const cli::Runner mesh = cli::addMeshCommand(app);
+    const cli::Runner reconstruct = cli::addReconstructCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
@@ -45,6 +49,8 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
         if (app.got_subcommand("convert")) return convert();
         if (app.got_subcommand("generate")) return generate();
         if (app.got_subcommand("rasterize")) return rasterize();
+        if (app.got_subcommand("mesh")) return mesh();
+        if (app.got_subcommand("reconstruct")) return reconstruct();
     } catch (const fluidsurf::Error& e) {
         std::cerr << "fluidsurf: error: " << e.what() << "\n";
         return 1;

@@ -1,6 +1,6 @@
 // MeshIO.cc - OBJ, binary PLY and legacy VTK mesh writers. Each builds the file in memory and
-// hands it to writeFileAtomic. OBJ floats are printed with 9 significant digits, enough to
-// round-trip float32 exactly.
+// hands it to writeFileAtomic. OBJ floats are printed in the shortest form that reads back as
+// the same float32 (std::to_chars), and OBJ text is encoded in parallel chunks.
 #include <fluidsurf/io/MeshIO.h>
 
 #include "io/ByteReader.h"
@@ -9,7 +9,11 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/io/AtomicFile.h>
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <charconv>
+#include <vector>
 
 namespace fluidsurf {
 namespace io {
@@ -31,7 +35,7 @@ namespace {
 void appendFloat(std::string& s, float v)
 {
     char buf[32];
-    auto r = std::to_chars(buf, buf + sizeof(buf), v, std::chars_format::general, 9);
+    auto r = std::to_chars(buf, buf + sizeof(buf), v);  // shortest text that reads back as v
     s.append(buf, r.ptr);
 }
 
@@ -42,33 +46,46 @@ void appendUint(std::string& s, uint64_t v)
     s.append(buf, r.ptr);
 }
 
+/// Text lines [0, count) made by line(string&, i), encoded in fixed chunks in parallel and joined
+/// in order (the same bytes for any thread count).
+template <typename F>
+void appendLines(std::string& s, size_t count, size_t bytesPerLine, F line)
+{
+    constexpr size_t kChunk = 8192;
+    std::vector<std::string> chunks((count + kChunk - 1) / kChunk);
+    tbb::parallel_for(size_t(0), chunks.size(), [&](size_t c) {
+        std::string& out = chunks[c];
+        out.reserve(kChunk * bytesPerLine);
+        for (size_t i = c * kChunk, e = std::min(count, i + kChunk); i < e; ++i) line(out, i);
+    });
+    size_t total = s.size();
+    for (const std::string& c : chunks) total += c.size();
+    s.reserve(total);
+    for (const std::string& c : chunks) s += c;
+}
+
 std::string encodeObj(const TriangleMesh& m)
 {
     std::string s = "# fluidsurf mesh: " + std::to_string(m.points.size()) + " vertices, " +
                     std::to_string(m.triangles.size()) + " triangles\n";
-    s.reserve(s.size() + m.points.size() * 70 + m.triangles.size() * 40);
-    for (const Vec3f& p : m.points) {
-        s += "v ";
-        appendFloat(s, p.x); s += ' ';
-        appendFloat(s, p.y); s += ' ';
-        appendFloat(s, p.z); s += '\n';
-    }
-    for (const Vec3f& n : m.normals) {
-        s += "vn ";
-        appendFloat(s, n.x); s += ' ';
-        appendFloat(s, n.y); s += ' ';
-        appendFloat(s, n.z); s += '\n';
-    }
+    auto vec = [](std::string& out, const char* tag, const Vec3f& v) {
+        out += tag;
+        appendFloat(out, v.x); out += ' ';
+        appendFloat(out, v.y); out += ' ';
+        appendFloat(out, v.z); out += '\n';
+    };
+    appendLines(s, m.points.size(), 40, [&](std::string& out, size_t i) { vec(out, "v ", m.points[i]); });
+    appendLines(s, m.normals.size(), 40, [&](std::string& out, size_t i) { vec(out, "vn ", m.normals[i]); });
     const bool withNormals = !m.normals.empty();
-    for (const auto& t : m.triangles) {
-        s += 'f';
-        for (uint32_t v : t) {
-            s += ' ';
-            appendUint(s, uint64_t(v) + 1);
-            if (withNormals) { s += "//"; appendUint(s, uint64_t(v) + 1); }
+    appendLines(s, m.triangles.size(), 48, [&](std::string& out, size_t i) {
+        out += 'f';
+        for (uint32_t v : m.triangles[i]) {
+            out += ' ';
+            appendUint(out, uint64_t(v) + 1);
+            if (withNormals) { out += "//"; appendUint(out, uint64_t(v) + 1); }
         }
-        s += '\n';
-    }
+        out += '\n';
+    });
     return s;
 }
 

@@ -8,6 +8,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <cmath>
+#include <memory>
 
 namespace fluidsurf {
 namespace narrowband {
@@ -16,9 +17,9 @@ namespace {
 constexpr int kMaxRounds = 32;
 
 /// Inactive voxels the band needs: the axis neighbours of active voxels with |phi| < threshold
-/// (the zero crossing may lie just beyond them), and the 26 neighbours of every voxel with a sign
-/// change to an active axis neighbour (so that all 8 cells around it are complete and marching
-/// cubes closes the surface there).
+/// (the zero crossing may lie just beyond them), and the corners of the 4 cells around every
+/// edge with a sign change between active voxels (so that marching cubes, which triangulates
+/// complete cells only, closes the surface there).
 struct FrontierFinder
 {
     const openvdb::FloatTree& tree;
@@ -37,22 +38,27 @@ struct FrontierFinder
             for (auto v = leaf->cbeginValueOn(); v; ++v) {
                 const openvdb::Coord c = v.getCoord();
                 const bool in = *v < 0;
-                bool crossing = false;
-                for (int axis = 0; axis < 3; ++axis)
+                for (int axis = 0; axis < 3; ++axis) {
                     for (int step : {-1, 1}) {
                         openvdb::Coord n = c;
                         n[axis] += step;
                         float w;
-                        if (acc.probeValue(n, w)) crossing |= (w < 0) != in;
-                        else if (std::abs(*v) < threshold) out.setValueOn(n);
-                    }
-                if (!crossing) continue;
-                for (int dx = -1; dx <= 1; ++dx)
-                    for (int dy = -1; dy <= 1; ++dy)
-                        for (int dz = -1; dz <= 1; ++dz) {
-                            const openvdb::Coord n = c.offsetBy(dx, dy, dz);
-                            if (!acc.isValueOn(n)) out.setValueOn(n);
+                        if (!acc.probeValue(n, w)) {
+                            if (std::abs(*v) < threshold) out.setValueOn(n);
+                        } else if ((w < 0) != in) {
+                            // Sign change on this edge: the 4 cells around it, 18 corners.
+                            const openvdb::Coord low = step == 1 ? c : n;
+                            const int b = (axis + 1) % 3, d = (axis + 2) % 3;
+                            for (int i = 0; i <= 1; ++i)
+                                for (int j = -1; j <= 1; ++j)
+                                    for (int k = -1; k <= 1; ++k) {
+                                        openvdb::Coord m = low;
+                                        m[axis] += i, m[b] += j, m[d] += k;
+                                        if (!acc.isValueOn(m)) out.setValueOn(m);
+                                    }
                         }
+                    }
+                }
             }
     }
     void join(FrontierFinder& other) { front->topologyUnion(*other.front); }
@@ -63,19 +69,23 @@ size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& partic
 {
     const float threshold = float(0.5 * params.voxelSize);
     size_t added = 0;
+    // The first round scans the whole band; later rounds only the voxels the previous one added
+    // (edges are checked from both ends, so a new voxel finds its crossings with old ones).
+    openvdb::FloatTree::Ptr lastAdded;
     for (int round = 0; round < kMaxRounds; ++round) {
         FrontierFinder finder(tree, threshold);
         {
-            openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(tree);
+            openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(lastAdded ? *lastAdded : tree);
             tbb::parallel_reduce(leaves.leafRange(), finder);
         }
         const size_t count = finder.front->activeVoxelCount();
         if (count == 0) break;
-        openvdb::FloatTree grown(*finder.front, tree.background(), openvdb::TopologyCopy());
-        field::evaluateField(grown, particles, params);
+        auto grown = std::make_shared<openvdb::FloatTree>(*finder.front, tree.background(), openvdb::TopologyCopy());
+        field::evaluateField(*grown, particles, params);
         openvdb::tree::ValueAccessor<openvdb::FloatTree> acc(tree);
-        for (auto v = grown.cbeginValueOn(); v; ++v) acc.setValue(v.getCoord(), *v);
+        for (auto v = grown->cbeginValueOn(); v; ++v) acc.setValue(v.getCoord(), *v);
         added += count;
+        lastAdded = grown;
     }
     return added;
 }
