@@ -1,6 +1,8 @@
 // Bench.h - benchmark cases of fluidsurf_bench and the timing helpers they share.
 #pragma once
 
+#include <fluidsurf/ParticleSet.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -32,6 +34,31 @@ struct FieldBenchOptions
 };
 
 int runFieldBench(const FieldBenchOptions& options);
+
+struct MeshBenchOptions
+{
+    std::string scenes = "real,drop-1M,block-1M";
+    std::string voxels = "1";  ///< in r (R = 4r)
+    int repeat = 3;
+    std::string shared = "../shared/data";
+    std::string dir = "/tmp";  ///< where the whole-pipeline rows write their OBJ
+};
+
+int runMeshBench(const MeshBenchOptions& options);
+
+/// A benchmark scene: a real frame (with its file, for whole-process rows) or a generated one.
+struct Case
+{
+    std::string name;
+    ParticleSet particles;
+    double radius;
+    std::string path;  ///< empty for generated scenes
+};
+
+/// "real" (the small real frames), "hilbert", or generated "drop-1M", "block-4M", ...
+std::vector<Case> loadCases(const std::string& scenes, const std::string& shared);
+std::vector<std::string> split(const std::string& commaSeparated);
+void resetPeakRss();  ///< restart VmHWM (/proc/self/clear_refs)
 
 inline double median(std::vector<double> v)
 {

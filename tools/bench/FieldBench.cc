@@ -17,14 +17,6 @@
 namespace fluidsurf {
 namespace bench {
 
-namespace {
-struct Case
-{
-    std::string name;
-    ParticleSet particles;
-    double radius;
-};
-
 void resetPeakRss()
 {
     std::ofstream f("/proc/self/clear_refs");
@@ -40,24 +32,25 @@ std::vector<std::string> split(const std::string& s)
     return out;
 }
 
-std::vector<Case> loadCases(const FieldBenchOptions& o)
+std::vector<Case> loadCases(const std::string& scenes, const std::string& shared)
 {
     std::vector<Case> cases;
-    for (const std::string& name : split(o.scenes)) {
+    for (const std::string& name : split(scenes)) {
         if (name == "real") {
             const char* files[] = {"double_dam_break_frame_26_4732_particles.vtk", "dam_break_frame_9_6859_particles.bgeo",
                                    "dam_break_frame_23_24389_particles.bgeo", "hilbert_46843_particles.bgeo",
                                    "bunny_frame_14_7705_particles.vtk", "cube_2366_particles.vtk"};
             for (const char* f : files) {
-                const std::string path = o.shared + "/real/" + f;
+                const std::string path = shared + "/real/" + f;
                 std::ifstream probe(path);
                 if (!probe) continue;
-                cases.push_back({std::string(f).substr(0, std::string(f).find("_particles")), io::readParticles(path), 0.025});
+                cases.push_back({std::string(f).substr(0, std::string(f).find("_particles")), io::readParticles(path), 0.025, path});
             }
             continue;
         }
         if (name.rfind("hilbert", 0) == 0) {
-            cases.push_back({"hilbert_46843", io::readParticles(o.shared + "/real/hilbert_46843_particles.bgeo"), 0.025});
+            const std::string path = shared + "/real/hilbert_46843_particles.bgeo";
+            cases.push_back({"hilbert_46843", io::readParticles(path), 0.025, path});
             continue;
         }
         // drop-1M, block-4M, ...: generated, r = 0.025
@@ -70,6 +63,7 @@ std::vector<Case> loadCases(const FieldBenchOptions& o)
     return cases;
 }
 
+namespace {
 struct Row
 {
     std::string scene, method;
@@ -127,7 +121,7 @@ int runFieldBench(const FieldBenchOptions& o)
     std::printf("| scene | particles | voxel | R | method | threads | field stage s | stages s | evaluations | M evals/s "
                 "| active voxels | peak RSS MiB | time / narrow band |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     const std::vector<std::string> methods = split(o.methods);
-    for (const Case& c : loadCases(o))
+    for (const Case& c : loadCases(o.scenes, o.shared))
         for (const std::string& v : split(o.voxels))
             for (const std::string& s : split(o.supports)) {
                 Params p = Params::fromRadius(c.radius);

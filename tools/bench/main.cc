@@ -2,6 +2,7 @@
 // throughput and peak RSS as a Markdown table (or JSON with --json) for BENCHMARKS.md.
 //   fluidsurf_bench io [--count N] [--repeat K]   particle read throughput per format
 //   fluidsurf_bench field [--scenes ...]          rasterize stages vs baselines and OpenVDB
+//   fluidsurf_bench mesh [--scenes ...]           meshing stage vs volumeToMesh; whole pipeline
 #include "Bench.h"
 
 #include <CLI/CLI.hpp>
@@ -28,6 +29,13 @@ int main(int argc, char** argv)
                                                      "p2ls, smooth")->capture_default_str();
     fieldCmd->add_option("--repeat", field.repeat, "runs per case (median)")->capture_default_str();
     fieldCmd->add_option("--shared", field.shared, "../shared/data")->capture_default_str();
+    fluidsurf::bench::MeshBenchOptions mesh;
+    CLI::App* meshCmd = app.add_subcommand("mesh", "meshing stage: our marching cubes vs volumeToMesh; whole pipeline");
+    meshCmd->add_option("--scenes", mesh.scenes, "real, hilbert, drop-1M, block-4M, ... (comma-separated)")->capture_default_str();
+    meshCmd->add_option("--voxel", mesh.voxels, "voxel sizes in r (comma-separated)")->capture_default_str();
+    meshCmd->add_option("--repeat", mesh.repeat, "runs per case (median)")->capture_default_str();
+    meshCmd->add_option("--shared", mesh.shared, "../shared/data")->capture_default_str();
+    meshCmd->add_option("--dir", mesh.dir, "folder for the whole-pipeline OBJ")->capture_default_str();
     bool coldAllocator = false;
     app.add_flag("--cold-allocator", coldAllocator,
                  "keep glibc's default malloc thresholds (big buffers come fresh from mmap each read)");
@@ -42,6 +50,7 @@ int main(int argc, char** argv)
     try {
         if (app.got_subcommand("io")) return fluidsurf::bench::runReadBench(io);
         if (app.got_subcommand("field")) return fluidsurf::bench::runFieldBench(field);
+        if (app.got_subcommand("mesh")) return fluidsurf::bench::runMeshBench(mesh);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "fluidsurf_bench: error: %s\n", e.what());
         return 1;

@@ -11,9 +11,9 @@
 
 #include <algorithm>
 #include <atomic>
-#include <bitset>
 #include <chrono>
 #include <numeric>
+#include <unordered_map>
 
 namespace fluidsurf {
 namespace mesh {
@@ -82,6 +82,87 @@ inline bool probe(const FloatLeaf& leaf, FloatAccessor& acc, int x, int y, int z
 /// One leaf's triangles, and the centre vertices it added (numbered kLocalVertex | i until the
 /// leaves are joined).
 constexpr uint32_t kLocalVertex = 0x80000000u;
+constexpr uint8_t kBitCount[8] = {0, 1, 1, 2, 1, 2, 2, 3};
+
+/// A leaf's active and inside (phi < 0) voxels as 8 words of 64 bits: word x, bit y * 8 + z
+/// (OpenVDB's leaf order). Cells and edges that stay inside the leaf are then found for 64
+/// (y, z) positions at once.
+struct LeafBits
+{
+    uint64_t active[8] = {}, in[8] = {};
+    LeafBits() = default;  // no leaf: nothing active
+    explicit LeafBits(const FloatLeaf& leaf)
+    {
+        const auto& mask = leaf.getValueMask();
+        for (int x = 0; x < 8; ++x) active[x] = mask.template getWord<uint64_t>(x), in[x] = 0;
+        const float* v = leaf.buffer().data();
+        for (int i = 0; i < 512; ++i) in[i >> 6] |= uint64_t(v[i] < 0) << (i & 63);
+    }
+};
+constexpr uint64_t kZBelow7 = 0x7F7F7F7F7F7F7F7FULL;  // bits with z < 7
+constexpr uint64_t kYBelow7 = 0x00FFFFFFFFFFFFFFULL;  // bits with y < 7
+constexpr uint64_t kZ0 = 0x0101010101010101ULL;       // bits with z = 0
+constexpr uint64_t kZ7 = kZ0 << 7, kY7 = 0xFFULL << 56;
+// Two planes of one x side by side in one word, so squareAll/Any see cells across a leaf face:
+// this leaf's row y = 7 as row 0 and the +y neighbour's row 0 as row 1; or column z = 7 as
+// column 0 and the +z neighbour's column 0 as column 1.
+inline uint64_t acrossY(uint64_t w, uint64_t plusY) { return w >> 56 | plusY << 8; }
+inline uint64_t acrossZ(uint64_t w, uint64_t plusZ) { return (w >> 7 & kZ0) | (plusZ & kZ0) << 1; }
+/// Bit (y, z) set when bits (y, z), (y, z+1), (y+1, z), (y+1, z+1) all are / any is.
+inline uint64_t squareAll(uint64_t w) { return w & w >> 1 & w >> 8 & w >> 9; }
+inline uint64_t squareAny(uint64_t w) { return w | w >> 1 | w >> 8 | w >> 9; }
+
+/// A linear transform as a matrix: index -> world, and its inverse Jacobian for gradients.
+/// (OpenVDB maps multiply row vectors, p * M; below as M^T * p.)
+struct Affine
+{
+    openvdb::Mat3d linear, jacobianInverse;
+    openvdb::Vec3d translation;
+    explicit Affine(const openvdb::math::Transform& xform)
+    {
+        const openvdb::math::AffineMap::Ptr map = xform.baseMap()->getAffineMap();
+        const openvdb::Mat4d m = map->getMat4();
+        linear = m.getMat3(), translation = m.getTranslation(), jacobianInverse = map->getConstJacobianInv();
+    }
+};
+
+/// A leaf and its six face neighbours as raw values and active bits (OpenVDB's per-value getters
+/// cost several times more here), for gradients at the leaf's voxels.
+struct LeafStar
+{
+    const float* values[7] = {};    // 0: the leaf; 1 + 2 * axis + (0: -axis, 1: +axis); null: none
+    const LeafBits* bits[7] = {};
+
+    /// Value and active state at local l, whose coordinate along axis may be -1 or 8.
+    bool read(Coord l, int axis, float& v) const
+    {
+        int k = 0;
+        if (l[axis] < 0) k = 1 + 2 * axis, l[axis] += FloatLeaf::DIM;
+        else if (l[axis] >= int(FloatLeaf::DIM)) k = 2 + 2 * axis, l[axis] -= FloatLeaf::DIM;
+        if (!values[k]) return false;
+        const int i = l.x() << 6 | l.y() << 3 | l.z();
+        v = values[k][i];
+        return bits[k]->active[i >> 6] >> (i & 63) & 1;
+    }
+    /// Gradient of phi (index space) at local l in [0, 7]^3: central differences between active
+    /// neighbours, one-sided where one is missing.
+    openvdb::Vec3d gradient(const Coord& l) const
+    {
+        const float center = values[0][l.x() << 6 | l.y() << 3 | l.z()];
+        openvdb::Vec3d g(0.0);
+        for (int a = 0; a < 3; ++a) {
+            Coord lo = l, hi = l;
+            lo[a] -= 1, hi[a] += 1;
+            float vlo = 0, vhi = 0;
+            const bool onLo = read(lo, a, vlo), onHi = read(hi, a, vhi);
+            if (onLo && onHi) g[a] = 0.5 * (double(vhi) - double(vlo));
+            else if (onHi) g[a] = double(vhi) - double(center);
+            else if (onLo) g[a] = double(center) - double(vlo);
+        }
+        return g;
+    }
+};
+
 struct LeafMesh
 {
     std::vector<std::array<uint32_t, 3>> triangles;
@@ -91,33 +172,80 @@ struct LeafMesh
 struct Passes
 {
     const FloatTree& tree;
-    const openvdb::math::Transform& xform;
+    Affine affine;
     IndexTree& index;
     openvdb::tree::LeafManager<IndexTree>& leaves;
     std::vector<uint64_t> first;  // per leaf: number of its first vertex (after pass 1)
 
+    std::vector<LeafBits> bits;   // per leaf (pass 0)
+    std::unordered_map<const IndexLeaf*, size_t> position;
+    const LeafBits none{};
+
     const FloatLeaf& valueLeaf(const IndexLeaf& leaf) const { return *tree.probeConstLeaf(leaf.origin()); }
+
+    /// The bits of the leaf one leaf away along +axis (or -axis: step -1); nothing active where
+    /// there is no leaf.
+    const LeafBits& next(const IndexLeaf& leaf, int axis, int step = 1) const
+    {
+        Coord o = leaf.origin();
+        o[axis] += step * int(IndexLeaf::DIM);
+        const IndexLeaf* n = index.probeConstLeaf(o);
+        return n ? bits[position.at(n)] : none;
+    }
+    LeafStar star(const IndexLeaf& leaf) const
+    {
+        LeafStar s;
+        s.values[0] = valueLeaf(leaf).buffer().data(), s.bits[0] = &bits[position.at(&leaf)];
+        for (int a = 0; a < 3; ++a)
+            for (int d = 0; d < 2; ++d) {
+                Coord o = leaf.origin();
+                o[a] += d ? int(FloatLeaf::DIM) : -int(FloatLeaf::DIM);
+                if (const FloatLeaf* l = tree.probeConstLeaf(o)) s.values[1 + 2 * a + d] = l->buffer().data();
+                s.bits[1 + 2 * a + d] = &next(leaf, a, d ? 1 : -1);
+            }
+        return s;
+    }
+    const FloatLeaf* nextValues(const IndexLeaf& leaf, int axis) const
+    {
+        Coord o = leaf.origin();
+        o[axis] += int(IndexLeaf::DIM);
+        return tree.probeConstLeaf(o);
+    }
+
+    // Pass 0: active and inside bits of every leaf.
+    void readBits()
+    {
+        bits.resize(leaves.leafCount());
+        for (size_t i = 0; i < leaves.leafCount(); ++i) position[&leaves.leaf(i)] = i;
+        tbb::parallel_for(leaves.leafRange(), [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
+            for (auto leaf = range.begin(); leaf; ++leaf) bits[leaf.pos()] = LeafBits(valueLeaf(*leaf));
+        });
+    }
 
     // Pass 1: crossing bits per active voxel, count per leaf.
     void markEdges()
     {
         std::vector<uint64_t> counts(leaves.leafCount(), 0);
         tbb::parallel_for(leaves.leafRange(), [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
-            FloatAccessor acc(tree);
             for (auto leaf = range.begin(); leaf; ++leaf) {
-                const FloatLeaf& values = valueLeaf(*leaf);
+                const LeafBits &here = bits[leaf.pos()], &nx = next(*leaf, 0), &ny = next(*leaf, 1), &nz = next(*leaf, 2);
                 uint64_t n = 0;
-                for (auto v = values.cbeginValueOn(); v; ++v) {
-                    const Coord l = FloatLeaf::offsetToLocalCoord(v.pos());
-                    const bool in = inside(*v);
-                    int64_t bits = 0;
-                    for (int a = 0; a < 3; ++a) {
-                        float w;
-                        if (probe(values, acc, l.x(), l.y(), l.z(), a == 0, a == 1, a == 2, w) && inside(w) != in)
-                            bits |= int64_t(1) << a;
+                for (int x = 0; x < 8; ++x) {
+                    const uint64_t act = here.active[x], in = here.in[x];
+                    // Edges to +z, +y and +x with a sign change between active ends; at the
+                    // leaf's far faces the other end is in the neighbouring leaf.
+                    const uint64_t ez = ((in ^ in >> 1) & act & act >> 1 & ~kZ7) |
+                                        ((in ^ nz.in[x] << 7) & act & nz.active[x] << 7 & kZ7);
+                    const uint64_t ey = ((in ^ in >> 8) & act & act >> 8 & kYBelow7) |
+                                        ((in ^ ny.in[x] << 56) & act & ny.active[x] << 56 & kY7);
+                    const uint64_t ex = x < 7 ? (in ^ here.in[x + 1]) & act & here.active[x + 1]
+                                              : (in ^ nx.in[0]) & act & nx.active[0];
+                    for (uint64_t todo = act; todo; todo &= todo - 1) {
+                        const int b = __builtin_ctzll(todo);
+                        const int64_t edges = int64_t(ex >> b & 1) | int64_t(ey >> b & 1) << 1 | int64_t(ez >> b & 1) << 2;
+                        leaf->setValueOnly(openvdb::Index(x << 6 | b), edges);
+                        n += kBitCount[edges];
                     }
-                    leaf->setValueOnly(v.pos(), bits);
-                    n += std::bitset<3>(uint64_t(bits)).count();
                 }
                 counts[leaf.pos()] = n;
             }
@@ -135,26 +263,41 @@ struct Passes
             FloatAccessor acc(tree);
             for (auto leaf = range.begin(); leaf; ++leaf) {
                 const FloatLeaf& values = valueLeaf(*leaf);
+                const LeafStar star = this->star(*leaf);
+                const LeafBits& here = bits[leaf.pos()];
+                int64_t* packed = leaf->buffer().data();
+                const float* buffer = values.buffer().data();
                 uint64_t next = first[leaf.pos()];
-                for (auto v = values.cbeginValueOn(); v; ++v) {
-                    const int64_t bits = leaf->getValue(v.pos());
-                    leaf->setValueOnly(v.pos(), int64_t(next) << 3 | bits);
-                    const Coord a = v.getCoord();
-                    for (int axis = 0; axis < 3; ++axis) {
-                        if (!(bits >> axis & 1)) continue;
-                        Coord b = a;
-                        b[axis] += 1;
-                        const float va = *v, vb = acc.getValue(b);
-                        const double t = crossing(va, vb);
-                        openvdb::Vec3d p = a.asVec3d();
-                        p[axis] += t;
-                        const openvdb::Vec3d w = xform.indexToWorld(p);
-                        const openvdb::Vec3f nrm = edgeNormal(acc, xform, a, b, t, va);
-                        mesh.points[next] = Vec3f(float(w.x()), float(w.y()), float(w.z()));
-                        mesh.normals[next] = Vec3f(nrm.x(), nrm.y(), nrm.z());
-                        ++next;
+                for (int x = 0; x < 8; ++x)
+                    for (uint64_t todo = here.active[x]; todo; todo &= todo - 1) {
+                        const int offset = x << 6 | __builtin_ctzll(todo);
+                        const int64_t edges = packed[offset];
+                        if (!edges) continue;  // only voxels with crossing edges are ever looked up
+                        packed[offset] = int64_t(next) << 3 | edges;
+                        const Coord l = FloatLeaf::offsetToLocalCoord(openvdb::Index(offset)), a = values.origin() + l;
+                        const openvdb::Vec3d ga = star.gradient(l);
+                        const float va = buffer[offset];
+                        for (int axis = 0; axis < 3; ++axis) {
+                            if (!(edges >> axis & 1)) continue;
+                            Coord lb = l, b = a;
+                            lb[axis] += 1, b[axis] += 1;
+                            float vb = 0;
+                            star.read(lb, axis, vb);
+                            const double t = crossing(va, vb);
+                            openvdb::Vec3d p = a.asVec3d();
+                            p[axis] += t;
+                            const openvdb::Vec3d w = affine.linear.transpose() * p + affine.translation;
+                            const openvdb::Vec3d gb = lb[axis] < int(FloatLeaf::DIM) ? star.gradient(lb) : indexGradient(acc, b);
+                            openvdb::Vec3d g = ga * (1 - t) + gb * t;
+                            // Where the gradient vanishes: the edge direction, from inside to outside.
+                            if (!(g.lengthSqr() > 0)) g[axis] = va < 0 ? 1.0 : -1.0;
+                            g = affine.jacobianInverse.transpose() * g;
+                            g.normalize();
+                            mesh.points[next] = Vec3f(float(w.x()), float(w.y()), float(w.z()));
+                            mesh.normals[next] = Vec3f(float(g.x()), float(g.y()), float(g.z()));
+                            ++next;
+                        }
                     }
-                }
             }
         });
     }
@@ -171,10 +314,46 @@ struct Passes
             for (auto leaf = range.begin(); leaf; ++leaf) {
                 const FloatLeaf& values = valueLeaf(*leaf);
                 auto& out = perLeaf[leaf.pos()];
-                for (auto v = values.cbeginValueOn(); v; ++v) {
-                    const Coord l = FloatLeaf::offsetToLocalCoord(v.pos());
-                    float c[8];
-                    c[0] = *v;
+                const LeafBits &here = bits[leaf.pos()], &nx = next(*leaf, 0), &ny = next(*leaf, 1), &nz = next(*leaf, 2);
+                const float* buffer = values.buffer().data();
+                const float* plus[3] = {nullptr, nullptr, nullptr};  // neighbour buffers, read only when active
+                for (int a = 0; a < 3; ++a)
+                    if (const FloatLeaf* l = nextValues(*leaf, a)) plus[a] = l->buffer().data();
+                float c[8];
+                // Value at local (x, y, z) with at most one coordinate equal to 8.
+                auto value = [&](int x, int y, int z) {
+                    if (x == 8) return plus[0][y << 3 | z];
+                    if (y == 8) return plus[1][x << 6 | z];
+                    if (z == 8) return plus[2][x << 6 | y << 3];
+                    return buffer[x << 6 | y << 3 | z];
+                };
+                // Cells that are complete and have a sign change, 64 candidates at a time, from
+                // the two x-planes of their corners (a, b: active; p, q: inside).
+                auto emit = [&](int x, uint64_t a0, uint64_t a1, uint64_t p0, uint64_t p1, uint64_t valid, int dy, int dz) {
+                    const uint64_t complete = squareAll(a0) & squareAll(a1) & valid;
+                    const uint64_t mixed = (squareAny(p0) | squareAny(p1)) & ~(squareAll(p0) & squareAll(p1));
+                    for (uint64_t todo = complete & mixed; todo; todo &= todo - 1) {
+                        const int b = __builtin_ctzll(todo), y = (b >> 3) + dy, z = (b & 7) + dz;
+                        for (int n = 0; n < 8; ++n) c[n] = value(x + kCorner[n][0], y + kCorner[n][1], z + kCorner[n][2]);
+                        ++cells;
+                        cell(values.origin().offsetBy(x, y, z), c, *leaf, idx, mesh, out);
+                    }
+                };
+                for (int x = 0; x < 7; ++x) {
+                    emit(x, here.active[x], here.active[x + 1], here.in[x], here.in[x + 1], ~kZ7 & kYBelow7, 0, 0);
+                    // y = 7 (z < 7) and z = 7 (y < 7): one row / column of candidates each.
+                    emit(x, acrossY(here.active[x], ny.active[x]), acrossY(here.active[x + 1], ny.active[x + 1]),
+                         acrossY(here.in[x], ny.in[x]), acrossY(here.in[x + 1], ny.in[x + 1]), 0x7F, 7, 0);
+                    emit(x, acrossZ(here.active[x], nz.active[x]), acrossZ(here.active[x + 1], nz.active[x + 1]),
+                         acrossZ(here.in[x], nz.in[x]), acrossZ(here.in[x + 1], nz.in[x + 1]), kZ0 & kYBelow7, 0, 7);
+                }
+                emit(7, here.active[7], nx.active[0], here.in[7], nx.in[0], ~kZ7 & kYBelow7, 0, 0);  // x = 7
+                // Cells with two or three coordinates 7 (22 per leaf): through the accessor.
+                for (int k = 0; k < 22; ++k) {
+                    const Coord l = k < 8 ? Coord(7, 7, k) : k < 15 ? Coord(7, k - 8, 7) : Coord(k - 15, 7, 7);
+                    const openvdb::Index offset = FloatLeaf::coordToOffset(l);
+                    if (!values.isValueOn(offset)) continue;
+                    c[0] = buffer[offset];
                     bool complete = true;
                     for (int n = 1; n < 8 && complete; ++n)
                         complete = probe(values, acc, l.x(), l.y(), l.z(), kCorner[n][0], kCorner[n][1], kCorner[n][2], c[n]);
@@ -183,7 +362,7 @@ struct Passes
                     for (int n = 0; n < 8; ++n) config |= int(inside(c[n])) << n;
                     if (config == 0 || config == 255) continue;
                     ++cells;
-                    cell(v.getCoord(), c, idx, mesh, out);
+                    cell(values.origin() + l, c, *leaf, idx, mesh, out);
                 }
             }
             surfaceCells += cells;
@@ -200,7 +379,8 @@ struct Passes
     // there two polygon vertices on that face may be joined by a fan diagonal in both cells,
     // which would give that edge four triangles. Those polygons get a centre vertex instead.
     template <typename IndexAccessor>
-    void cell(const Coord& origin, const float c[8], IndexAccessor& idx, const TriangleMesh& mesh, LeafMesh& out) const
+    void cell(const Coord& origin, const float c[8], const IndexLeaf& indexLeaf, IndexAccessor& idx,
+              const TriangleMesh& mesh, LeafMesh& out) const
     {
         int next[12];
         std::fill(next, next + 12, -1);
@@ -230,9 +410,12 @@ struct Passes
             if (next[e] < 0) continue;
             Coord g = origin;
             for (int a = 0; a < 3; ++a) g[a] += kCorner[kEdges.lowCorner[e]][a];
-            const int64_t packed = idx.getValue(g);
+            const Coord l = g - indexLeaf.origin();
+            const int64_t packed = (unsigned(l.x()) | unsigned(l.y()) | unsigned(l.z())) < IndexLeaf::DIM
+                                       ? indexLeaf.getValue(IndexLeaf::coordToOffset(l))
+                                       : idx.getValue(g);
             const int axis = kEdges.axis[e];
-            vertex[e] = uint32_t((packed >> 3) + std::bitset<3>(uint64_t(packed & ((1 << axis) - 1))).count());
+            vertex[e] = uint32_t((packed >> 3) + kBitCount[packed & ((1 << axis) - 1)]);
         }
         bool done[12] = {};
         for (int start = 0; start < 12; ++start) {
@@ -293,8 +476,9 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, MeshStats* stats)
     }
     IndexTree index(*tree, int64_t(0), openvdb::TopologyCopy());
     openvdb::tree::LeafManager<IndexTree> leaves(index);
-    Passes passes{*tree, grid.transform(), index, leaves, {}};
+    Passes passes{*tree, Affine(grid.transform()), index, leaves, {}, {}, {}};
     TriangleMesh mesh;
+    passes.readBits();
     passes.markEdges();
     if (passes.first.back() >= kLocalVertex)
         throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");

@@ -1,0 +1,82 @@
+// MeshBench.cc - `fluidsurf_bench mesh`: the meshing stage (our marching cubes vs OpenVDB's
+// volumeToMesh on the same grid) against the field stage, and the whole pipeline per scene
+// (read, field, mesh, write OBJ). One Markdown row per case (median of --repeat runs).
+#include "Bench.h"
+
+#include <fluidsurf/MeshLevelSet.h>
+#include <fluidsurf/Rasterize.h>
+#include <fluidsurf/io/MeshIO.h>
+#include <fluidsurf/io/ParticleIO.h>
+
+#include <tbb/info.h>
+
+#include <cstdio>
+
+namespace fluidsurf {
+namespace bench {
+
+int runMeshBench(const MeshBenchOptions& o)
+{
+    const int hw = tbb::info::default_concurrency();
+    std::printf("fluidsurf_bench mesh: %d hardware threads; seconds are medians of %d runs; R = 4r\n\n", hw, o.repeat);
+    std::printf("| scene | particles | voxel | field stage s | mesher | mesh s | mesh / field | triangles | M triangles/s "
+                "| peak RSS MiB | volumeToMesh / ours |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::vector<std::string> pipeline;
+    for (const Case& c : loadCases(o.scenes, o.shared))
+        for (const std::string& v : split(o.voxels)) {
+            Params p = Params::fromRadius(c.radius);
+            p.voxelSize = std::stod(v) * c.radius;
+            std::vector<double> field;
+            RasterizeResult res;
+            for (int k = 0; k < o.repeat; ++k) {
+                res = rasterizeParticles(c.particles, p);
+                field.push_back(res.stats.totalSeconds());
+            }
+            const double fieldSeconds = median(field);
+            double ours = 0;
+            for (Mesher m : {Mesher::MarchingCubes, Mesher::OpenVdb}) {
+                std::vector<double> t;
+                MeshStats ms;
+                resetPeakRss();
+                for (int k = 0; k < o.repeat; ++k) {
+                    meshLevelSet(*res.grid, m, &ms);
+                    t.push_back(ms.seconds);
+                }
+                const double s = median(t);
+                if (m == Mesher::MarchingCubes) ours = s;
+                std::printf("| %s | %zu | %s r | %.3f | %s | %.4f | %.1f%% | %zu | %.1f | %.0f | %s |\n", c.name.c_str(),
+                            c.particles.size(), v.c_str(), fieldSeconds,
+                            m == Mesher::MarchingCubes ? "ours (mc)" : "OpenVDB volumeToMesh", s, 100 * s / fieldSeconds,
+                            ms.triangles, ms.triangles / s * 1e-6, peakRssMiB(),
+                            m == Mesher::MarchingCubes ? "" : (std::to_string(s / ours).substr(0, 4) + "x").c_str());
+                std::fflush(stdout);
+            }
+            // Whole pipeline, as `fluidsurf reconstruct` runs it (without process start-up).
+            std::vector<double> read, total, write;
+            const std::string out = o.dir + "/fluidsurf_bench_mesh.obj";
+            for (int k = 0; k < o.repeat; ++k) {
+                double r = 0;
+                ParticleSet loaded;
+                if (!c.path.empty()) r = seconds([&] { loaded = io::readParticles(c.path); });
+                const RasterizeResult rr = rasterizeParticles(c.path.empty() ? c.particles : loaded, p);
+                MeshStats ms;
+                const TriangleMesh mesh = meshLevelSet(*rr.grid, Mesher::MarchingCubes, &ms);
+                const double w = seconds([&] { io::writeMesh(mesh, out); });
+                read.push_back(r), write.push_back(w), total.push_back(r + rr.stats.totalSeconds() + ms.seconds + w);
+            }
+            std::remove(out.c_str());
+            char line[512];
+            std::snprintf(line, sizeof(line), "| %s | %s r | %s | %.3f | %.3f | %.4f | %.3f | %.3f |", c.name.c_str(), v.c_str(),
+                          c.path.empty() ? "-" : std::to_string(median(read)).substr(0, 6).c_str(), fieldSeconds, ours,
+                          median(write), median(total), peakRssMiB());
+            pipeline.push_back(line);
+        }
+    std::printf("\nWhole pipeline (read, field, our mesher, write OBJ with normals; no process start-up):\n\n"
+                "| scene | voxel | read s | field s | mesh s | write OBJ s | total s | peak RSS MiB |\n"
+                "|---|---|---|---|---|---|---|---|\n");
+    for (const std::string& l : pipeline) std::printf("%s\n", l.c_str());
+    return 0;
+}
+
+} // namespace bench
+} // namespace fluidsurf
