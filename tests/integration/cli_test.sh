@@ -156,5 +156,50 @@ if [ -f "$SHARED/real/hilbert_46843_particles.bgeo" ]; then
     check "far particle: peak RSS $m1 -> $m2 MiB (< 10%)" /usr/bin/python3 -c "import sys; sys.exit(0 if abs($m2 - $m1) < 0.1 * $m1 else 1)"
 fi
 
+# --- mesh and reconstruct ------------------------------------------------------------------
+# An independent OBJ check (Python standard library): indices in range, a normal per vertex, and
+# every edge in exactly two triangles that walk it in opposite directions (closed, oriented).
+cat > "$T/objcheck.py" <<'PY'
+import sys
+v = vn = 0; edges = {}; faces = 0
+for line in open(sys.argv[1]):
+    if line.startswith('v '): v += 1
+    elif line.startswith('vn '): vn += 1
+    elif line.startswith('f '):
+        ids = [int(t.split('/')[0]) for t in line.split()[1:]]
+        assert len(ids) == 3 and all(1 <= i <= v for i in ids), line
+        faces += 1
+        for a, b in ((ids[0], ids[1]), (ids[1], ids[2]), (ids[2], ids[0])):
+            assert (a, b) not in edges, 'edge walked twice the same way: %s' % line
+            edges[(a, b)] = 1
+assert faces > 0 and vn == v, (faces, v, vn)
+open_edges = [e for e in edges if (e[1], e[0]) not in edges]
+assert not open_edges, '%d boundary edges' % len(open_edges)
+print(v, faces)
+PY
+check "mesh --help" bash -c "'$BIN' mesh --help | grep -q -- '--mesher'"
+check "reconstruct --help" bash -c "'$BIN' reconstruct --help | grep -q -- '--influence'"
+check "reconstruct a generated drop" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop.obj" --vdb "$T/drop_ls.vdb" -q
+check "reconstruct: OBJ closed and oriented (independent check)" bash -c "/usr/bin/python3 '$T/objcheck.py' '$T/drop.obj' >/dev/null"
+check "reconstruct --vdb wrote the level set" bash -c "vdb_print '$T/drop_ls.vdb' | grep -q surface"
+check "mesh of that .vdb = reconstruct's mesh" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop2.obj' -q && cmp -s '$T/drop.obj' '$T/drop2.obj'"
+check "mesh --check says watertight" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop3.ply' --check | grep -q watertight"
+check "mesh --mesher openvdb" bash -c "'$BIN' mesh '$T/drop_ls.vdb' --mesher openvdb -o '$T/dropv.obj' -q && /usr/bin/python3 '$T/objcheck.py' '$T/dropv.obj' >/dev/null"
+check "mesh to .vtk" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop.vtk' -q && head -c 30 '$T/drop.vtk' | grep -q vtk"
+check "reconstruct threads: identical OBJ" bash -c "'$BIN' reconstruct '$T/drop.bgeo' -r 0.01 -o '$T/j1.obj' -j 1 -q && '$BIN' reconstruct '$T/drop.bgeo' -r 0.01 -o '$T/j2.obj' -j 2 -q && cmp -s '$T/j1.obj' '$T/j2.obj'"
+check "reconstruct a sequence" bash -c "'$BIN' reconstruct '$T/seq_{:04}.bgeo' -r 0.01 -o '$T/m_{:04}.obj' -q && [ -s '$T/m_0001.obj' ] && [ -s '$T/m_0003.obj' ]"
+check "mesh a sequence" bash -c "'$BIN' mesh '$T/ls_{:04}.vdb' -o '$T/lm_{:04}.ply' -q && [ -s '$T/lm_0002.ply' ]"
+expect_error "mesh: output must be a mesh format" "must end in .obj, .ply or .vtk" "$BIN" mesh "$T/drop_ls.vdb" -o "$T/bad.stl"
+expect_error "mesh: input is not a VDB" "not an OpenVDB file" "$BIN" mesh "$T/drop.bgeo" -o "$T/bad.obj"
+expect_error "mesh: no such grid" "no float grid named 'density'" "$BIN" mesh "$T/drop_ls.vdb" --grid density -o "$T/bad.obj"
+"$BIN" convert "$T/drop.bgeo" "$T/drop_points.vdb" >/dev/null
+expect_error "mesh: a points VDB has no level set" "no float grid" "$BIN" mesh "$T/drop_points.vdb" -o "$T/bad.obj"
+expect_error "reconstruct: --vdb must be .vdb" "must end in .vdb" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --vdb "$T/bad.ply"
+expect_error "mesh: unknown mesher" "mesher" "$BIN" mesh "$T/drop_ls.vdb" --mesher dual -o "$T/bad.obj"
+check "mesh: no output after errors" bash -c "[ ! -e '$T/bad.obj' ] && [ ! -e '$T/bad.stl' ]"
+if [ -f "$SHARED/real/hilbert_46843_particles.bgeo" ]; then
+    check "reconstruct hilbert: valid OBJ with normals" bash -c "'$BIN' reconstruct '$SHARED/real/hilbert_46843_particles.bgeo' -r 0.025 -o '$T/hilbert.obj' -q && /usr/bin/python3 '$T/objcheck.py' '$T/hilbert.obj' >/dev/null"
+fi
+
 echo "cli: $pass passed, $fail failed"
 [ $fail -eq 0 ]
