@@ -66,7 +66,7 @@ int runMeshBench(const MeshBenchOptions& o)
             }
             std::remove(out.c_str());
             char line[512];
-            std::snprintf(line, sizeof(line), "| %s | %s r | %s | %.3f | %.3f | %.4f | %.3f | %.3f |", c.name.c_str(), v.c_str(),
+            std::snprintf(line, sizeof(line), "| %s | %s r | %s | %.3f | %.3f | %.4f | %.3f | %.0f |", c.name.c_str(), v.c_str(),
                           c.path.empty() ? "-" : std::to_string(median(read)).substr(0, 6).c_str(), fieldSeconds, ours,
                           median(write), median(total), peakRssMiB());
             pipeline.push_back(line);

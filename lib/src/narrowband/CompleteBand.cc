@@ -24,17 +24,31 @@ struct FrontierFinder
 {
     const openvdb::FloatTree& tree;
     float threshold;
+    bool bothEnds;  // look for crossings from both ends of each edge (scanning only new voxels)
     openvdb::MaskTree::Ptr front{new openvdb::MaskTree(false)};
 
-    FrontierFinder(const openvdb::FloatTree& t, float th) : tree(t), threshold(th) {}
-    FrontierFinder(FrontierFinder& o, tbb::split) : tree(o.tree), threshold(o.threshold) {}
+    FrontierFinder(const openvdb::FloatTree& t, float th, bool both) : tree(t), threshold(th), bothEnds(both) {}
+    FrontierFinder(FrontierFinder& o, tbb::split) : tree(o.tree), threshold(o.threshold), bothEnds(o.bothEnds) {}
 
     template <typename Range>
     void operator()(const Range& range)
     {
+        using LeafT = openvdb::FloatTree::LeafNodeType;
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
         openvdb::tree::ValueAccessor<openvdb::MaskTree> out(*front);
-        for (auto leaf = range.begin(); leaf; ++leaf)
+        for (auto leaf = range.begin(); leaf; ++leaf) {
+            // The scanned voxels are active in tree: read their own leaf directly, others
+            // through the accessor.
+            const LeafT* home = tree.probeConstLeaf(leaf->origin());
+            auto probe = [&](const openvdb::Coord& m, float& w) {
+                const openvdb::Coord l = m - leaf->origin();
+                if ((unsigned(l.x()) | unsigned(l.y()) | unsigned(l.z())) < LeafT::DIM) {
+                    const openvdb::Index i = LeafT::coordToOffset(l);
+                    w = home->getValue(i);
+                    return home->isValueOn(i);
+                }
+                return acc.probeValue(m, w);
+            };
             for (auto v = leaf->cbeginValueOn(); v; ++v) {
                 const openvdb::Coord c = v.getCoord();
                 const bool in = *v < 0;
@@ -43,9 +57,9 @@ struct FrontierFinder
                         openvdb::Coord n = c;
                         n[axis] += step;
                         float w;
-                        if (!acc.probeValue(n, w)) {
+                        if (!probe(n, w)) {
                             if (std::abs(*v) < threshold) out.setValueOn(n);
-                        } else if ((w < 0) != in) {
+                        } else if ((w < 0) != in && (bothEnds || step == 1)) {
                             // Sign change on this edge: the 4 cells around it, 18 corners.
                             const openvdb::Coord low = step == 1 ? c : n;
                             const int b = (axis + 1) % 3, d = (axis + 2) % 3;
@@ -54,12 +68,14 @@ struct FrontierFinder
                                     for (int k = -1; k <= 1; ++k) {
                                         openvdb::Coord m = low;
                                         m[axis] += i, m[b] += j, m[d] += k;
-                                        if (!acc.isValueOn(m)) out.setValueOn(m);
+                                        float unused;
+                                        if (!probe(m, unused)) out.setValueOn(m);
                                     }
                         }
                     }
                 }
             }
+        }
     }
     void join(FrontierFinder& other) { front->topologyUnion(*other.front); }
 };
@@ -73,7 +89,7 @@ size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& partic
     // (edges are checked from both ends, so a new voxel finds its crossings with old ones).
     openvdb::FloatTree::Ptr lastAdded;
     for (int round = 0; round < kMaxRounds; ++round) {
-        FrontierFinder finder(tree, threshold);
+        FrontierFinder finder(tree, threshold, lastAdded != nullptr);
         {
             openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(lastAdded ? *lastAdded : tree);
             tbb::parallel_reduce(leaves.leafRange(), finder);
