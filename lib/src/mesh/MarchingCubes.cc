@@ -2,6 +2,7 @@
 #include "mesh/MarchingCubes.h"
 
 #include "mesh/Gradient.h"
+#include "mesh/LeafBits.h"
 
 #include <fluidsurf/Error.h>
 
@@ -11,7 +12,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <numeric>
 #include <unordered_map>
 
@@ -84,35 +84,6 @@ inline bool probe(const FloatLeaf& leaf, FloatAccessor& acc, int x, int y, int z
 constexpr uint32_t kLocalVertex = 0x80000000u;
 constexpr uint8_t kBitCount[8] = {0, 1, 1, 2, 1, 2, 2, 3};
 
-/// A leaf's active and inside (phi < 0) voxels as 8 words of 64 bits: word x, bit y * 8 + z
-/// (OpenVDB's leaf order). Cells and edges that stay inside the leaf are then found for 64
-/// (y, z) positions at once.
-struct LeafBits
-{
-    uint64_t active[8] = {}, in[8] = {};
-    LeafBits() = default;  // no leaf: nothing active
-    explicit LeafBits(const FloatLeaf& leaf)
-    {
-        const auto& mask = leaf.getValueMask();
-        for (int x = 0; x < 8; ++x) active[x] = mask.template getWord<uint64_t>(x), in[x] = 0;
-        const float* v = leaf.buffer().data();
-        for (int i = 0; i < 512; ++i) in[i >> 6] |= uint64_t(v[i] < 0) << (i & 63);
-    }
-};
-constexpr uint64_t kZBelow7 = 0x7F7F7F7F7F7F7F7FULL;  // bits with z < 7
-constexpr uint64_t kYBelow7 = 0x00FFFFFFFFFFFFFFULL;  // bits with y < 7
-constexpr uint64_t kZ0 = 0x0101010101010101ULL;       // bits with z = 0
-constexpr uint64_t kZ7 = kZ0 << 7, kY7 = 0xFFULL << 56;
-// Two planes of one x side by side in one word, so squareAll/Any see cells across a leaf face:
-// this leaf's row y = 7 as row 0 and the +y neighbour's row 0 as row 1; or column z = 7 as
-// column 0 and the +z neighbour's column 0 as column 1.
-inline uint64_t acrossY(uint64_t w, uint64_t plusY) { return w >> 56 | plusY << 8; }
-inline uint64_t acrossZ(uint64_t w, uint64_t plusZ) { return (w >> 7 & kZ0) | (plusZ & kZ0) << 1; }
-/// Bit (y, z) set when bits (y, z), (y, z+1), (y+1, z), (y+1, z+1) all are / any is.
-inline uint64_t squareAll(uint64_t w) { return w & w >> 1 & w >> 8 & w >> 9; }
-inline uint64_t squareAny(uint64_t w) { return w | w >> 1 | w >> 8 | w >> 9; }
-
-/// A linear transform as a matrix: index -> world, and its inverse Jacobian for gradients.
 /// (OpenVDB maps multiply row vectors, p * M; below as M^T * p.)
 struct Affine
 {
@@ -123,43 +94,6 @@ struct Affine
         const openvdb::math::AffineMap::Ptr map = xform.baseMap()->getAffineMap();
         const openvdb::Mat4d m = map->getMat4();
         linear = m.getMat3(), translation = m.getTranslation(), jacobianInverse = map->getConstJacobianInv();
-    }
-};
-
-/// A leaf and its six face neighbours as raw values and active bits (OpenVDB's per-value getters
-/// cost several times more here), for gradients at the leaf's voxels.
-struct LeafStar
-{
-    const float* values[7] = {};    // 0: the leaf; 1 + 2 * axis + (0: -axis, 1: +axis); null: none
-    const LeafBits* bits[7] = {};
-
-    /// Value and active state at local l, whose coordinate along axis may be -1 or 8.
-    bool read(Coord l, int axis, float& v) const
-    {
-        int k = 0;
-        if (l[axis] < 0) k = 1 + 2 * axis, l[axis] += FloatLeaf::DIM;
-        else if (l[axis] >= int(FloatLeaf::DIM)) k = 2 + 2 * axis, l[axis] -= FloatLeaf::DIM;
-        if (!values[k]) return false;
-        const int i = l.x() << 6 | l.y() << 3 | l.z();
-        v = values[k][i];
-        return bits[k]->active[i >> 6] >> (i & 63) & 1;
-    }
-    /// Gradient of phi (index space) at local l in [0, 7]^3: central differences between active
-    /// neighbours, one-sided where one is missing.
-    openvdb::Vec3d gradient(const Coord& l) const
-    {
-        const float center = values[0][l.x() << 6 | l.y() << 3 | l.z()];
-        openvdb::Vec3d g(0.0);
-        for (int a = 0; a < 3; ++a) {
-            Coord lo = l, hi = l;
-            lo[a] -= 1, hi[a] += 1;
-            float vlo = 0, vhi = 0;
-            const bool onLo = read(lo, a, vlo), onHi = read(hi, a, vhi);
-            if (onLo && onHi) g[a] = 0.5 * (double(vhi) - double(vlo));
-            else if (onHi) g[a] = double(vhi) - double(center);
-            else if (onLo) g[a] = double(center) - double(vlo);
-        }
-        return g;
     }
 };
 
@@ -463,9 +397,8 @@ void dropUnusedVertices(TriangleMesh& mesh)
 
 } // namespace
 
-TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, MeshStats* stats)
+TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, size_t* surfaceCells)
 {
-    const auto start = std::chrono::steady_clock::now();
     // Active tiles (rare in level sets) become voxels so that every active value is a leaf voxel.
     openvdb::FloatTree::Ptr voxelized;
     const FloatTree* tree = &grid.tree();
@@ -501,12 +434,7 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, MeshStats* stats)
         mesh.normals.insert(mesh.normals.end(), l.normals.begin(), l.normals.end());
     }
     dropUnusedVertices(mesh);
-    if (stats) {
-        stats->surfaceCells = cells;
-        stats->vertices = mesh.points.size();
-        stats->triangles = mesh.triangles.size();
-        stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
+    if (surfaceCells) *surfaceCells = cells;
     return mesh;
 }
 

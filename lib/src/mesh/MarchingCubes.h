@@ -18,7 +18,8 @@
 namespace fluidsurf {
 namespace mesh {
 
-TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, MeshStats* stats);
+/// surfaceCells (optional): the number of cells with a sign change that were triangulated.
+TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, size_t* surfaceCells = nullptr);
 
 } // namespace mesh
 } // namespace fluidsurf

@@ -7,6 +7,8 @@
 #include "mesh/MarchingCubes.h"
 #include "mesh/VolumeToMesh.h"
 
+#include <chrono>
+
 namespace fluidsurf {
 
 const char* mesherName(Mesher m) { return m == Mesher::MarchingCubes ? "mc" : "openvdb"; }
@@ -22,7 +24,16 @@ TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, MeshSta
 {
     if (!grid.transform().isLinear())
         throw ValueError("grid '" + grid.getName() + "' has a non-linear (frustum) transform; only linear ones are meshed");
-    return mesher == Mesher::MarchingCubes ? mesh::marchingCubes(grid, stats) : mesh::openvdbVolumeToMesh(grid, stats);
+    const auto start = std::chrono::steady_clock::now();
+    size_t cells = 0;
+    TriangleMesh m = mesher == Mesher::MarchingCubes ? mesh::marchingCubes(grid, &cells) : mesh::openvdbVolumeToMesh(grid);
+    if (stats) {
+        stats->surfaceCells = cells;
+        stats->vertices = m.points.size();
+        stats->triangles = m.triangles.size();
+        stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    return m;
 }
 
 openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string& gridName)

@@ -8,14 +8,12 @@
 
 #include <tbb/parallel_for.h>
 
-#include <chrono>
 
 namespace fluidsurf {
 namespace mesh {
 
-TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid, MeshStats* stats)
+TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid)
 {
-    const auto start = std::chrono::steady_clock::now();
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
     std::vector<openvdb::Vec4I> quads;
@@ -51,11 +49,6 @@ TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid, MeshStats* stat
     for (const openvdb::Vec4I& q : quads) {
         mesh.triangles.push_back({q[0], q[2], q[1]});
         mesh.triangles.push_back({q[0], q[3], q[2]});
-    }
-    if (stats) {
-        stats->vertices = mesh.points.size();
-        stats->triangles = mesh.triangles.size();
-        stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     return mesh;
 }

@@ -7,7 +7,7 @@
 namespace fluidsurf {
 namespace mesh {
 
-TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid, MeshStats* stats);
+TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid);
 
 } // namespace mesh
 } // namespace fluidsurf
