@@ -9,21 +9,29 @@ namespace mesh {
 
 using FloatAccessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree>;
 
-/// Gradient of phi at voxel ijk in index space (per voxel), from active neighbours only.
-inline openvdb::Vec3d indexGradient(FloatAccessor& acc, const openvdb::Coord& ijk)
+/// Gradient of phi (index space) at a voxel with value center: read(neighbour, axis, value)
+/// gives a neighbour's value and whether it is active. Central differences between active
+/// neighbours, one-sided where one of them is missing (thesis eq. 4.10-4.12).
+template <typename Read>
+inline openvdb::Vec3d activeGradient(const openvdb::Coord& ijk, float center, Read&& read)
 {
-    const float center = acc.getValue(ijk);
     openvdb::Vec3d g(0.0);
     for (int a = 0; a < 3; ++a) {
         openvdb::Coord lo = ijk, hi = ijk;
         lo[a] -= 1, hi[a] += 1;
         float vlo = 0, vhi = 0;
-        const bool onLo = acc.probeValue(lo, vlo), onHi = acc.probeValue(hi, vhi);
+        const bool onLo = read(lo, a, vlo), onHi = read(hi, a, vhi);
         if (onLo && onHi) g[a] = 0.5 * (double(vhi) - double(vlo));
         else if (onHi) g[a] = double(vhi) - double(center);
         else if (onLo) g[a] = double(center) - double(vlo);
     }
     return g;
+}
+
+/// The same through an accessor, at any voxel.
+inline openvdb::Vec3d indexGradient(FloatAccessor& acc, const openvdb::Coord& ijk)
+{
+    return activeGradient(ijk, acc.getValue(ijk), [&](const openvdb::Coord& c, int, float& v) { return acc.probeValue(c, v); });
 }
 
 } // namespace mesh

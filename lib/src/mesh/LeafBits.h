@@ -66,18 +66,8 @@ struct LeafStar
     /// neighbours, one-sided where one is missing.
     openvdb::Vec3d gradient(const openvdb::Coord& l) const
     {
-        const float center = values[0][l.x() << 6 | l.y() << 3 | l.z()];
-        openvdb::Vec3d g(0.0);
-        for (int a = 0; a < 3; ++a) {
-            openvdb::Coord lo = l, hi = l;
-            lo[a] -= 1, hi[a] += 1;
-            float vlo = 0, vhi = 0;
-            const bool onLo = read(lo, a, vlo), onHi = read(hi, a, vhi);
-            if (onLo && onHi) g[a] = 0.5 * (double(vhi) - double(vlo));
-            else if (onHi) g[a] = double(vhi) - double(center);
-            else if (onLo) g[a] = double(center) - double(vlo);
-        }
-        return g;
+        return activeGradient(l, values[0][l.x() << 6 | l.y() << 3 | l.z()],
+                              [this](const openvdb::Coord& c, int axis, float& v) { return read(c, axis, v); });
     }
 };
 
