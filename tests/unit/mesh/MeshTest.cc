@@ -174,6 +174,7 @@ TEST(MarchingCubes, LatticeBallMatchesTheField)
         meanField += 0.5 * (lo + hi) / rays;
     }
     EXPECT_NEAR(meanVertex, meanField, 0.2 * sp.radius) << "mesh " << meanVertex << ", field " << meanField;
+    ::testing::Test::RecordProperty("mean_vertex_radius_minus_field_radius_in_r", std::to_string((meanVertex - meanField) / sp.radius));
     checkBothMeshers(*res.grid, "ball");
 }
 
