@@ -10,6 +10,7 @@ trap 'rm -rf "$T"' EXIT
 cmake --install "$BUILD" --prefix "$T/prefix" >/dev/null
 test -f "$T/prefix/include/fluidsurf/ParticleSet.h"
 test -f "$T/prefix/include/fluidsurf/Version.h"
+test -f "$T/prefix/include/fluidsurf/MeshLevelSet.h"
 test -f "$T/prefix/lib/cmake/fluidsurf/fluidsurfConfig.cmake"
 GEN=()
 command -v ninja >/dev/null && GEN=(-G Ninja)
@@ -18,4 +19,5 @@ cmake --build "$T/build" >/dev/null
 out=$("$T/build/downstream" "$T/p.ply")
 echo "$out"
 grep -q "downstream read 1000 particles" <<<"$out"
+grep -q "watertight" <<<"$out"
 echo "install: 1 passed, 0 failed"
