@@ -13,6 +13,7 @@
 // eigenproblem in double precision; the CUDA backend must use the same.
 #pragma once
 
+#include "field/FieldMath.h"
 #include "util/Lanes.h"
 
 #include <fluidsurf/Params.h>
@@ -22,15 +23,6 @@
 
 namespace fluidsurf {
 namespace field {
-
-struct FieldSums
-{
-    double w = 0;
-    double d[3] = {0, 0, 0};
-    double r = 0;                    ///< sum w_j r_j (per-particle radii only)
-    double g[3] = {0, 0, 0};
-    double m[6] = {0, 0, 0, 0, 0, 0};  ///< xx, xy, xz, yy, yz, zz
-};
 
 /// The same sums while they are accumulated, in float (scatter: one vertex) or in
 /// util::Lanes (gather: independent per-lane partial sums).
@@ -81,78 +73,18 @@ FieldSums toFieldSums(const PartialSums<T>& a)
     return s;
 }
 
-struct FieldConstants
+/// FieldMath's constants from the parameters.
+inline FieldConstants fieldConstants(const Params& p, bool perParticleRadii)
 {
-    double influenceRadius = 0;
-    double radius = 0;          ///< uniform r (used when perParticleRadii is false)
-    bool perParticleRadii = false;
-    bool ssp07 = true;
-    double tLow = 0.4, tHigh = 3.5;
-    float background = 0;       ///< phi is clamped to [-background, background]
-
-    static FieldConstants from(const Params& p, bool perParticleRadii)
-    {
-        FieldConstants c;
-        c.influenceRadius = p.influenceRadius;
-        c.radius = p.radius;
-        c.perParticleRadii = perParticleRadii;
-        c.ssp07 = p.field == FieldKind::Ssp07;
-        c.tLow = p.tLow;
-        c.tHigh = p.tHigh;
-        c.background = float(p.background());
-        return c;
-    }
-};
-
-/// Largest eigenvalue of the symmetric 3x3 matrix (xx, xy, xz, yy, yz, zz).
-inline double largestEigenvalueSym(const double a[6])
-{
-    const double p1 = a[1] * a[1] + a[2] * a[2] + a[4] * a[4];
-    const double q = (a[0] + a[3] + a[5]) / 3;
-    const double b0 = a[0] - q, b3 = a[3] - q, b5 = a[5] - q;
-    const double p2 = b0 * b0 + b3 * b3 + b5 * b5 + 2 * p1;
-    if (!(p2 > 1e-30 * (q * q + 1e-300))) return q;  // a multiple of the identity
-    const double p = std::sqrt(p2 / 6);
-    // det((A - qI) / p) / 2, clamped against rounding before acos.
-    const double det = b0 * (b3 * b5 - a[4] * a[4]) - a[1] * (a[1] * b5 - a[4] * a[2]) + a[2] * (a[1] * a[4] - b3 * a[2]);
-    const double half = std::clamp(det / (2 * p * p * p), -1.0, 1.0);
-    return q + 2 * p * std::cos(std::acos(half) / 3);
-}
-
-/// phi at a vertex from its sums; +background when no particle is within R.
-inline float fieldValue(const FieldSums& s, const FieldConstants& c)
-{
-    if (!(s.w > 0)) return c.background;
-    const double inv = 1 / s.w;
-    const double xb[3] = {s.d[0] * inv, s.d[1] * inv, s.d[2] * inv};
-    const double dist = std::sqrt(xb[0] * xb[0] + xb[1] * xb[1] + xb[2] * xb[2]);
-    const double rbar = c.perParticleRadii ? s.r * inv : c.radius;
-    double f = 1;
-    if (c.ssp07) {
-        const double k = 6 / (c.influenceRadius * c.influenceRadius) * inv;
-        // Symmetric part of J = k (M - xb G^T).
-        const double sym[6] = {
-            k * (s.m[0] - xb[0] * s.g[0]),
-            k * (s.m[1] - 0.5 * (xb[0] * s.g[1] + xb[1] * s.g[0])),
-            k * (s.m[2] - 0.5 * (xb[0] * s.g[2] + xb[2] * s.g[0])),
-            k * (s.m[3] - xb[1] * s.g[1]),
-            k * (s.m[4] - 0.5 * (xb[1] * s.g[2] + xb[2] * s.g[1])),
-            k * (s.m[5] - xb[2] * s.g[2]),
-        };
-        // Gershgorin bound: when every disc lies below t_low, f = 1 without the eigen-solve.
-        const double bound = std::max({sym[0] + std::abs(sym[1]) + std::abs(sym[2]),
-                                       sym[3] + std::abs(sym[1]) + std::abs(sym[4]),
-                                       sym[5] + std::abs(sym[2]) + std::abs(sym[4])});
-        if (bound >= c.tLow) {
-            const double ev = largestEigenvalueSym(sym);
-            if (ev >= c.tLow) {
-                const double gamma = std::clamp((c.tHigh - ev) / (c.tHigh - c.tLow), 0.0, 1.0);
-                f = gamma * gamma * gamma - 3 * gamma * gamma + 3 * gamma;
-            }
-        }
-    }
-    const double phi = dist - rbar * f;
-    return float(std::clamp(phi, -double(c.background), double(c.background)));
+    FieldConstants c;
+    c.influenceRadius = p.influenceRadius;
+    c.radius = p.radius;
+    c.perParticleRadii = perParticleRadii;
+    c.ssp07 = p.field == FieldKind::Ssp07;
+    c.tLow = p.tLow;
+    c.tHigh = p.tHigh;
+    c.background = float(p.background());
+    return c;
 }
 
 } // namespace field

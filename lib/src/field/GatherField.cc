@@ -197,7 +197,7 @@ size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& parti
     const bool radii = !particles.radii.empty();
     const int reach = int(std::ceil(params.influenceRadius / params.voxelSize));
     const int slabs = int(LeafT::DIM) + 2 * reach;
-    Kernel kernel{particles, FieldConstants::from(params, radii), params.voxelSize, params.influenceRadius,
+    Kernel kernel{particles, fieldConstants(params, radii), params.voxelSize, params.influenceRadius,
                   reach, radii, (slabs + 15) / 16};  // at most 16 x 16 columns
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
     std::atomic<size_t> evaluations{0};

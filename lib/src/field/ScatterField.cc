@@ -43,7 +43,7 @@ void scatter(const neighbors::CellIndex& particles, const openvdb::CoordBBox& bo
 openvdb::FloatTree::Ptr scatterField(const neighbors::CellIndex& particles, const Params& params, size_t* evaluations)
 {
     const bool radii = !particles.radii.empty();
-    const FieldConstants constants = FieldConstants::from(params, radii);
+    const FieldConstants constants = fieldConstants(params, radii);
     auto tree = std::make_shared<openvdb::FloatTree>(constants.background);
     const openvdb::CoordBBox box = narrowband::boundingVolume(particles, params);
     if (box.empty()) return tree;
