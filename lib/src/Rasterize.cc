@@ -3,6 +3,7 @@
 #include <fluidsurf/Rasterize.h>
 
 #include "classify/Classify.h"
+#include "field/CudaField.h"
 #include "field/GatherField.h"
 #include "field/ScatterField.h"
 #include "levelset/LevelSet.h"
@@ -13,6 +14,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
 
 namespace fluidsurf {
 
@@ -61,6 +63,18 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
     for (size_t i = 0; i < ps.size(); ++i)
         if (!ps.positions[i].isFinite())
             throw ValueError("particle " + std::to_string(i) + " has a non-finite position");
+    if (params.device == Device::Cuda && params.method == FieldMethod::Scatter)
+        throw ValueError("the scatter baseline runs on the CPU only (--device cpu)");
+    // Looking for the GPU (and creating its context) overlaps the CPU stages; the answer is
+    // needed at the field stage.
+    struct GpuCheck { bool usable = false; std::string reason; };
+    std::future<GpuCheck> gpuCheck;
+    if (params.device != Device::Cpu && params.method != FieldMethod::Scatter)
+        gpuCheck = std::async(std::launch::async, [] {
+            GpuCheck c;
+            c.usable = field::cudaUsable(&c.reason);
+            return c;
+        });
     RasterizeResult result;
     RasterizeStats& stats = result.stats;
     stats.particles = ps.size();
@@ -106,8 +120,17 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
         }
         clock.done("bounding volume");
     }
+    bool onGpu = false;
+    if (gpuCheck.valid()) {
+        const GpuCheck gpu = gpuCheck.get();
+        if (params.device == Device::Cuda && !gpu.usable)
+            throw Error("CUDA was requested but there is no usable GPU: " + gpu.reason);
+        onGpu = gpu.usable;
+    }
     if (params.method == FieldMethod::Scatter) {
         tree = field::scatterField(index, params, &stats.fieldEvaluations);
+    } else if (onGpu) {
+        stats.fieldEvaluations = field::evaluateFieldCuda(*tree, index, params, stats);
     } else {
         stats.fieldEvaluations = field::evaluateField(*tree, index, params);
     }

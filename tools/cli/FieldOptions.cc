@@ -24,6 +24,17 @@ double peakRssMiB()
     return double(u.ru_maxrss) / 1024.0;
 }
 
+void printDevice(const RasterizeStats& s)
+{
+    std::printf("  field gather on %s", s.device.c_str());
+    if (!s.gpuStages.empty()) {
+        std::printf(" (CUDA events:");
+        for (const StageTime& st : s.gpuStages) std::printf(" %s %.2f ms", st.name.c_str(), st.seconds * 1e3);
+        std::printf("; %.1f MiB of device memory)", double(s.gpuBytes) / (1 << 20));
+    }
+    std::printf("\n");
+}
+
 double chooseRadius(const FieldOptions& o, const ParticleSet& ps, bool print)
 {
     if (o.radius > 0) return o.radius;
@@ -66,6 +77,8 @@ void addFieldOptions(CLI::App* cmd, FieldOptions& o)
     cmd->add_option("--field", o.field, "ssp07 or zb05")->capture_default_str()->check(CLI::IsMember({"ssp07", "zb05"}));
     cmd->add_option("--method", o.method, "narrow-band, or the baselines gather-full and scatter")
         ->capture_default_str()->check(CLI::IsMember({"narrow-band", "gather-full", "scatter"}));
+    cmd->add_option("--device", o.device, "cpu, cuda (field gather on the GPU) or auto (cuda when a usable GPU is present)")
+        ->capture_default_str()->check(CLI::IsMember({"cpu", "cuda", "auto"}));
     cmd->add_flag("--ignore-radius-attribute", o.ignoreRadiusAttribute, "use r for every particle even with pscale");
     cmd->add_flag("--keep-isolated", o.keepIsolated, "isolated particles become spheres of radius r in the grid");
 }
@@ -85,6 +98,7 @@ Params makeParams(const FieldOptions& o, double radius)
     p.keepIsolated = o.keepIsolated;
     p.field = fieldFromName(o.field);
     p.method = methodFromName(o.method);
+    p.device = deviceFromName(o.device);
     return p;
 }
 

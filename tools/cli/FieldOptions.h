@@ -4,6 +4,7 @@
 
 #include <fluidsurf/Params.h>
 #include <fluidsurf/ParticleSet.h>
+#include <fluidsurf/Rasterize.h>
 
 #include <CLI/CLI.hpp>
 
@@ -14,7 +15,7 @@ namespace cli {
 
 struct FieldOptions
 {
-    std::string field = "ssp07", method = "narrow-band";
+    std::string field = "ssp07", method = "narrow-band", device = "cpu";
     double radius = 0, voxel = 1, influence = 4, smoothing = 4, band = 2, halfWidth = 3;
     double tLow = 0.4, tHigh = 3.5, colorField = 0.9;
     int surfaceNeighbours = 25, splashNeighbours = 3;
@@ -30,6 +31,8 @@ double chooseRadius(const FieldOptions& o, const ParticleSet& ps, bool print);
 Params makeParams(const FieldOptions& o, double radius);
 
 double peakRssMiB();
+/// With -v: where the field gather ran, and the GPU's own timings when it was a GPU.
+void printDevice(const RasterizeStats& stats);
 bool endsWith(const std::string& s, const std::string& suffix);
 
 } // namespace cli

@@ -163,6 +163,7 @@ Runner addReconstructCommand(CLI::App& app)
                             res.stats.isolated, o->field.keepIsolated ? "kept as spheres" : "left out",
                             ri.droppedNonFinite);
             meshAndWrite(*o, *res.grid, jobs[i], bar.enabled(), stages);
+            if (o->verbose) printDevice(res.stats);
         }
         bar.finish();
         return 0;

@@ -91,6 +91,7 @@ Runner addRasterizeCommand(CLI::App& app)
                             "width %g r, voxel %g r\n",
                             s.fieldEvaluations, s.fieldEvaluations / std::max(1e-9, fieldSeconds) * 1e-6,
                             s.bandCompletion, s.bandWidth / radius, o->field.voxel);
+                printDevice(s);
                 std::printf("  peak memory %.1f MiB\n", peakRssMiB());
             }
         }

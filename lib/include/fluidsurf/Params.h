@@ -24,6 +24,11 @@ enum class FieldMethod {
     Scatter      ///< baseline: serial, particles add to every vertex of the bounding volume
 };
 
+/// Where the field is computed. Cuda runs the field gather on the first GPU (narrow band and
+/// gather-full; neighbours, classification and band topology stay on the CPU for now); Auto picks
+/// Cuda when the library was built with CUDA and a usable GPU is present, else Cpu.
+enum class Device { Cpu, Cuda, Auto };
+
 struct Params
 {
     double radius = 0;           ///< r: particle radius, half the rest spacing
@@ -46,6 +51,7 @@ struct Params
                                    ///< (default: left out of the grid and reported)
     FieldKind field = FieldKind::Ssp07;
     FieldMethod method = FieldMethod::NarrowBand;
+    Device device = Device::Cpu;
 
     /// The DESIGN.md defaults for particle radius r.
     static Params fromRadius(double r);
@@ -60,5 +66,7 @@ const char* fieldName(FieldKind f);      ///< "ssp07", "zb05"
 const char* methodName(FieldMethod m);   ///< "narrow-band", "gather-full", "scatter"
 FieldKind fieldFromName(const std::string& name);      ///< ValueError for unknown names
 FieldMethod methodFromName(const std::string& name);   ///< ValueError for unknown names
+const char* deviceName(Device d);                      ///< "cpu", "cuda", "auto"
+Device deviceFromName(const std::string& name);        ///< ValueError for unknown names
 
 } // namespace fluidsurf

@@ -36,6 +36,10 @@ struct RasterizeStats
     double bandWidth = 0;         ///< half width actually used, world units
     std::vector<StageTime> stages;
     double totalSeconds() const;
+    std::string device = "cpu";       ///< where the field gather ran: "cpu" or the GPU's name
+    std::vector<StageTime> gpuStages;  ///< with CUDA: upload, gather kernel, download (CUDA
+                                       ///< events, inside the "field" stage; not in totalSeconds)
+    size_t gpuBytes = 0;               ///< device memory the gather allocated
 };
 
 struct RasterizeResult

@@ -24,6 +24,10 @@ struct DeviceInfo
 /// The first CUDA device, or why there is none. Never throws.
 DeviceInfo queryDevice();
 
+/// queryDevice() plus the CUDA context created, once per process (later calls return the same
+/// answer at no cost). Never throws.
+DeviceInfo openDevice();
+
 /// Z-order (Morton) code of the cell of size cellSize holding each position, cells counted from
 /// origin, 21 bits per axis interleaved as x0 y0 z0 x1 y1 z1 ... (x in the lowest bit).
 /// Coordinates below origin or beyond 2^21 cells are clamped. Runs on the GPU.

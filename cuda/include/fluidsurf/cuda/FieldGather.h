@@ -1,0 +1,51 @@
+// FieldGather.h - the SSP07 / ZB05 gather on the GPU (host facade, no CUDA syntax): every active
+// voxel of the given leaf blocks gathers the particles within R and stores phi, the same formula
+// as the CPU (lib/src/field/FieldMath.h), summed in a different order (values agree to ~1e-6 r).
+//
+// Inputs are plain arrays the host builds from its cell index and band topology: particles in
+// cell order with the sorted Morton keys of the occupied cells, and per leaf the voxel index of
+// its corner and 8 words of active bits (word x, bit y * 8 + z). One CUDA block per leaf: the
+// block collects the occupied cells near its leaf, streams their particles through shared
+// memory in tiles, and each thread sums for its voxels.
+#pragma once
+
+#include <fluidsurf/Vec3.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace fluidsurf {
+namespace cuda {
+
+struct GatherInput
+{
+    const Vec3f* positions = nullptr;   ///< particles in cell order
+    const float* radii = nullptr;       ///< per particle, or null for the uniform radius
+    size_t particleCount = 0;
+    const uint64_t* cellKeys = nullptr; ///< sorted Morton keys of the occupied cells
+    const uint32_t* cellStarts = nullptr;  ///< cellCount + 1 offsets into the particles
+    size_t cellCount = 0;
+    double cellSize = 0, cellOrigin[3] = {0, 0, 0};
+    uint32_t cellDims[3] = {0, 0, 0};
+    const int32_t* leafOrigins = nullptr;   ///< 3 per leaf: voxel index of the leaf's corner
+    const uint64_t* leafActive = nullptr;   ///< 8 per leaf: active voxels
+    size_t leafCount = 0;
+    // The field (see Params): lengths in world units.
+    double voxelSize = 0, influenceRadius = 0, radius = 0, tLow = 0.4, tHigh = 3.5;
+    float background = 0;
+    bool ssp07 = true;
+};
+
+struct GatherTimes
+{
+    double uploadMs = 0, kernelMs = 0, downloadMs = 0;  ///< CUDA events on the stream
+    size_t deviceBytes = 0;                              ///< device memory allocated
+};
+
+/// phi for the 512 voxels of every leaf (leafCount * 512 values, leaf after leaf, OpenVDB's voxel
+/// order); inactive voxels hold the background. Throws fluidsurf::Error on CUDA errors.
+std::vector<float> gatherField(const GatherInput& input, GatherTimes* times = nullptr, void* stream = nullptr);
+
+} // namespace cuda
+} // namespace fluidsurf

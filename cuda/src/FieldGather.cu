@@ -1,0 +1,275 @@
+// FieldGather.cu - the SSP07 / ZB05 gather on the GPU, one block per VDB leaf (see
+// fluidsurf/cuda/FieldGather.h). The finish from sums to phi is lib/src/field/FieldMath.h, the
+// same code the CPU runs.
+#include <fluidsurf/cuda/FieldGather.h>
+
+#include "Check.cuh"
+#include "field/FieldMath.h"
+
+#include <memory>
+
+namespace fluidsurf {
+namespace cuda {
+
+namespace {
+
+constexpr int kThreads = 256;         // 2 voxels of the 8^3 leaf per thread
+constexpr int kVoxelsPerThread = 512 / kThreads;
+constexpr int kTile = 256;            // particles staged in shared memory at a time
+constexpr int kCellChunk = 512;       // occupied-cell lookups per pass
+
+struct Params
+{
+    const float3* positions;
+    const float* radii;
+    const unsigned long long* keys;
+    const uint32_t* starts;
+    unsigned long long cellCount;
+    double cellSize, cellOrigin[3];
+    int cellDims[3];
+    const int32_t* leafOrigins;
+    const unsigned long long* leafActive;
+    double dx, R;
+    field::FieldConstants constants;
+    float* out;
+};
+
+__device__ __forceinline__ unsigned long long spreadBits(unsigned long long v)
+{
+    v &= 0x1fffff;
+    v = (v | (v << 32)) & 0x001f00000000ffffull;
+    v = (v | (v << 16)) & 0x001f0000ff0000ffull;
+    v = (v | (v << 8)) & 0x100f00f00f00f00full;
+    v = (v | (v << 4)) & 0x10c30c30c30c30c3ull;
+    v = (v | (v << 2)) & 0x1249249249249249ull;
+    return v;
+}
+
+/// Cell coordinate along an axis, clamped to [-1, dims] like the CPU's CellIndex::cellCoord.
+__device__ __forceinline__ long long cellCoord(const Params& p, double v, int axis)
+{
+    const double c = floor((v - p.cellOrigin[axis]) / p.cellSize);
+    return (long long)fmin(fmax(c, -1.0), double(p.cellDims[axis]));
+}
+
+/// Position of key among the sorted occupied keys, or -1.
+__device__ long long findCell(const Params& p, unsigned long long key)
+{
+    unsigned long long lo = 0, hi = p.cellCount;
+    while (lo < hi) {
+        const unsigned long long mid = (lo + hi) / 2;
+        if (p.keys[mid] < key) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo < p.cellCount && p.keys[lo] == key ? (long long)lo : -1;
+}
+
+struct Sums
+{
+    float w = 0, d0 = 0, d1 = 0, d2 = 0, r = 0, g0 = 0, g1 = 0, g2 = 0, m0 = 0, m1 = 0, m2 = 0, m3 = 0, m4 = 0, m5 = 0;
+};
+
+__global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
+{
+    __shared__ uint32_t cellBegin[kCellChunk], cellPrefix[kCellChunk + 1];
+    __shared__ float4 tile[kTile];
+    __shared__ int cellsInChunk;
+
+    const int leaf = blockIdx.x;
+    const int3 origin = make_int3(p.leafOrigins[3 * leaf], p.leafOrigins[3 * leaf + 1], p.leafOrigins[3 * leaf + 2]);
+    const double o[3] = {origin.x * p.dx, origin.y * p.dx, origin.z * p.dx};
+    const float invR2 = float(1 / (p.R * p.R));
+
+    int voxel[kVoxelsPerThread];
+    bool active[kVoxelsPerThread];
+    float vx[kVoxelsPerThread], vy[kVoxelsPerThread], vz[kVoxelsPerThread];
+    Sums acc[kVoxelsPerThread];
+    for (int k = 0; k < kVoxelsPerThread; ++k) {
+        const int v = threadIdx.x + k * kThreads;  // OpenVDB order: x * 64 + y * 8 + z
+        voxel[k] = v;
+        active[k] = (p.leafActive[8 * leaf + (v >> 6)] >> (v & 63)) & 1ull;
+        vx[k] = float((v >> 6) * p.dx), vy[k] = float(((v >> 3) & 7) * p.dx), vz[k] = float((v & 7) * p.dx);
+    }
+
+    // The occupied cells overlapping the leaf's voxel box widened by R.
+    long long c0[3], c1[3];
+    for (int a = 0; a < 3; ++a) {
+        c0[a] = cellCoord(p, o[a] - p.R, a);
+        c1[a] = cellCoord(p, o[a] + 7 * p.dx + p.R, a);
+    }
+    const long long nx = c1[0] - c0[0] + 1, ny = c1[1] - c0[1] + 1, nz = c1[2] - c0[2] + 1;
+    const long long boxCells = nx * ny * nz;
+    for (long long chunk = 0; chunk < boxCells; chunk += kCellChunk) {
+        if (threadIdx.x == 0) cellsInChunk = 0;
+        __syncthreads();
+        // Each thread looks up a few cells of the chunk; the found ones are appended (their
+        // order does not matter for correctness, only for the last bits of the sums).
+        for (long long c = chunk + threadIdx.x; c < chunk + kCellChunk && c < boxCells; c += kThreads) {
+            const long long cx = c0[0] + c % nx, cy = c0[1] + (c / nx) % ny, cz = c0[2] + c / (nx * ny);
+            if (cx < 0 || cy < 0 || cz < 0 || cx >= p.cellDims[0] || cy >= p.cellDims[1] || cz >= p.cellDims[2]) continue;
+            const long long at = findCell(p, spreadBits(cx) | spreadBits(cy) << 1 | spreadBits(cz) << 2);
+            if (at < 0) continue;
+            const int slot = atomicAdd(&cellsInChunk, 1);
+            cellBegin[slot] = p.starts[at];
+            cellPrefix[slot + 1] = p.starts[at + 1] - p.starts[at];
+        }
+        __syncthreads();
+        const int cells = cellsInChunk;
+        if (threadIdx.x == 0) {
+            cellPrefix[0] = 0;
+            for (int i = 0; i < cells; ++i) cellPrefix[i + 1] += cellPrefix[i];
+        }
+        __syncthreads();
+        const uint32_t total = cellPrefix[cells];
+        for (uint32_t base = 0; base < total; base += kTile) {
+            const uint32_t flat = base + threadIdx.x;
+            if (threadIdx.x < kTile) {
+                float4 q = make_float4(3e30f, 3e30f, 3e30f, 0.f);  // past the end: adds nothing
+                if (flat < total) {
+                    int lo = 0, hi = cells - 1;  // last cell whose prefix <= flat
+                    while (lo < hi) {
+                        const int mid = (lo + hi + 1) / 2;
+                        if (cellPrefix[mid] <= flat) lo = mid;
+                        else hi = mid - 1;
+                    }
+                    const uint32_t i = cellBegin[lo] + (flat - cellPrefix[lo]);
+                    const float3 x = p.positions[i];
+                    // Leaf-local coordinates, computed like the CPU (difference in double).
+                    q = make_float4(float(double(x.x) - o[0]), float(double(x.y) - o[1]), float(double(x.z) - o[2]),
+                                    p.radii ? p.radii[i] : 0.f);
+                }
+                tile[threadIdx.x] = q;
+            }
+            __syncthreads();
+            const int n = min(kTile, int(total - base));
+            for (int k = 0; k < kVoxelsPerThread; ++k) {
+                if (!active[k]) continue;
+                Sums& a = acc[k];
+                for (int j = 0; j < n; ++j) {
+                    const float4 q = tile[j];
+                    const float ex = q.x - vx[k], ey = q.y - vy[k], ez = q.z - vz[k];
+                    const float s2 = (ex * ex + ey * ey + ez * ez) * invR2;
+                    float t = 1.f - s2;
+                    if (!(t > 1e-6f)) continue;  // the CPU's cut-off (FieldValue.h)
+                    const float t2 = t * t, wt = t2 * t;
+                    a.w += wt;
+                    a.d0 += wt * ex, a.d1 += wt * ey, a.d2 += wt * ez;
+                    a.r += wt * q.w;
+                    const float gx = t2 * ex, gy = t2 * ey, gz = t2 * ez;
+                    a.g0 += gx, a.g1 += gy, a.g2 += gz;
+                    a.m0 += gx * ex, a.m1 += gx * ey, a.m2 += gx * ez;
+                    a.m3 += gy * ey, a.m4 += gy * ez, a.m5 += gz * ez;
+                }
+            }
+            __syncthreads();
+        }
+    }
+    for (int k = 0; k < kVoxelsPerThread; ++k) {
+        float value = p.constants.background;
+        if (active[k]) {
+            const Sums& a = acc[k];
+            field::FieldSums s;
+            s.w = a.w, s.r = a.r;
+            s.d[0] = a.d0, s.d[1] = a.d1, s.d[2] = a.d2;
+            s.g[0] = a.g0, s.g[1] = a.g1, s.g[2] = a.g2;
+            s.m[0] = a.m0, s.m[1] = a.m1, s.m[2] = a.m2, s.m[3] = a.m3, s.m[4] = a.m4, s.m[5] = a.m5;
+            value = field::fieldValue(s, p.constants);
+        }
+        p.out[size_t(leaf) * 512 + voxel[k]] = value;
+    }
+}
+
+struct DeviceFree
+{
+    void operator()(void* p) const { cudaFree(p); }
+};
+
+/// Device copies that are freed on every path.
+class DeviceBuffers
+{
+public:
+    template <typename T>
+    T* upload(const T* host, size_t count, cudaStream_t stream)
+    {
+        T* d = alloc<T>(count);
+        if (count) FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(d, host, count * sizeof(T), cudaMemcpyHostToDevice, stream));
+        return d;
+    }
+    template <typename T>
+    T* alloc(size_t count)
+    {
+        void* d = nullptr;
+        FLUIDSURF_CUDA_CHECK(cudaMalloc(&d, count ? count * sizeof(T) : 1));
+        mBuffers.emplace_back(d);
+        mBytes += count * sizeof(T);
+        return static_cast<T*>(d);
+    }
+    size_t bytes() const { return mBytes; }
+
+private:
+    std::vector<std::unique_ptr<void, DeviceFree>> mBuffers;
+    size_t mBytes = 0;
+};
+
+struct Event
+{
+    cudaEvent_t e = nullptr;
+    Event() { FLUIDSURF_CUDA_CHECK(cudaEventCreate(&e)); }
+    ~Event() { cudaEventDestroy(e); }
+};
+
+float elapsedMs(const Event& a, const Event& b)
+{
+    float ms = 0;
+    FLUIDSURF_CUDA_CHECK(cudaEventElapsedTime(&ms, a.e, b.e));
+    return ms;
+}
+
+} // namespace
+
+std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* streamPtr)
+{
+    std::vector<float> out(in.leafCount * 512, in.background);
+    if (in.leafCount == 0) return out;
+    if (!(in.cellSize > 0 && in.voxelSize > 0 && in.influenceRadius > 0)) throw Error("gatherField: invalid sizes");
+    cudaStream_t stream = static_cast<cudaStream_t>(streamPtr);
+    Event start, uploaded, computed, done;
+    DeviceBuffers buffers;
+    FLUIDSURF_CUDA_CHECK(cudaEventRecord(start.e, stream));
+    Params p{};
+    static_assert(sizeof(Vec3f) == sizeof(float3), "Vec3f must be three packed floats");
+    p.positions = buffers.upload(reinterpret_cast<const float3*>(in.positions), in.particleCount, stream);
+    p.radii = in.radii ? buffers.upload(in.radii, in.particleCount, stream) : nullptr;
+    p.keys = buffers.upload(reinterpret_cast<const unsigned long long*>(in.cellKeys), in.cellCount, stream);
+    p.starts = buffers.upload(in.cellStarts, in.cellCount + 1, stream);
+    p.cellCount = in.cellCount;
+    p.cellSize = in.cellSize;
+    for (int a = 0; a < 3; ++a) p.cellOrigin[a] = in.cellOrigin[a], p.cellDims[a] = int(in.cellDims[a]);
+    p.leafOrigins = buffers.upload(in.leafOrigins, 3 * in.leafCount, stream);
+    p.leafActive = buffers.upload(reinterpret_cast<const unsigned long long*>(in.leafActive), 8 * in.leafCount, stream);
+    p.dx = in.voxelSize, p.R = in.influenceRadius;
+    p.constants.influenceRadius = in.influenceRadius;
+    p.constants.radius = in.radius;
+    p.constants.perParticleRadii = in.radii != nullptr;
+    p.constants.ssp07 = in.ssp07;
+    p.constants.tLow = in.tLow, p.constants.tHigh = in.tHigh;
+    p.constants.background = in.background;
+    p.out = buffers.alloc<float>(out.size());
+    FLUIDSURF_CUDA_CHECK(cudaEventRecord(uploaded.e, stream));
+    gatherKernel<<<unsigned(in.leafCount), kThreads, 0, stream>>>(p);
+    FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+    FLUIDSURF_CUDA_CHECK(cudaEventRecord(computed.e, stream));
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), p.out, out.size() * sizeof(float), cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(cudaEventRecord(done.e, stream));
+    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    if (times) {
+        times->uploadMs = elapsedMs(start, uploaded);
+        times->kernelMs = elapsedMs(uploaded, computed);
+        times->downloadMs = elapsedMs(computed, done);
+        times->deviceBytes = buffers.bytes();
+    }
+    return out;
+}
+
+} // namespace cuda
+} // namespace fluidsurf

@@ -1,0 +1,112 @@
+// CudaFieldTest.cc - the field gather on the GPU (Params::device = Cuda) against the CPU path:
+// identical active topology, values within 1e-5 r, the same zero crossings. Skipped with the
+// reason where there is no usable GPU (CI); there, a CUDA request must fail with a clear error.
+#include "TestData.h"
+
+#include "field/CudaField.h"
+
+#include <fluidsurf/Rasterize.h>
+#include <fluidsurf/Scenes.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace fluidsurf {
+namespace {
+
+#define FLUIDSURF_REQUIRE_GPU()                                                                    \
+    do {                                                                                           \
+        std::string why;                                                                           \
+        if (!field::cudaUsable(&why)) GTEST_SKIP() << "no usable GPU: " << why;                    \
+    } while (0)
+
+/// CPU and CUDA grids of the same particles and parameters agree.
+void expectSameField(const ParticleSet& ps, Params p, const std::string& what)
+{
+    p.device = Device::Cpu;
+    const RasterizeResult cpu = rasterizeParticles(ps, p, what);
+    p.device = Device::Cuda;
+    const RasterizeResult gpu = rasterizeParticles(ps, p, what);
+    EXPECT_NE(gpu.stats.device, "cpu") << what;
+    ASSERT_TRUE(cpu.grid->tree().hasSameTopology(gpu.grid->tree())) << what << ": active topology differs";
+    auto acc = gpu.grid->getConstAccessor();
+    double worst = 0;
+    size_t signFlips = 0, n = 0;
+    for (auto it = cpu.grid->cbeginValueOn(); it; ++it, ++n) {
+        const float a = *it, b = acc.getValue(it.getCoord());
+        worst = std::max(worst, double(std::abs(a - b)));
+        if (std::abs(a) > 1e-5 * p.radius && (a < 0) != (b < 0)) ++signFlips;
+    }
+    EXPECT_LE(worst, 1e-5 * p.radius) << what << ": largest difference " << worst / p.radius << " r over " << n << " voxels";
+    EXPECT_EQ(signFlips, 0u) << what << ": zero crossings differ";
+    ::testing::Test::RecordProperty(what + "_worst_difference_in_r", std::to_string(worst / p.radius));
+}
+
+TEST(FieldCuda, MatchesCpuOnRealFrames)
+{
+    FLUIDSURF_REQUIRE_GPU();
+    FLUIDSURF_REQUIRE_SHARED_DATA();
+    for (const test::RealFrame& f : test::kRealFrames)
+        expectSameField(io::readParticles(test::sharedData() + "/real/" + f.name), Params::fromRadius(f.radius), f.name);
+}
+
+TEST(FieldCuda, MatchesCpuOnGeneratedScenesAndSettings)
+{
+    FLUIDSURF_REQUIRE_GPU();
+    SceneParams sp;
+    sp.count = 30000;
+    for (Scene scene : {Scene::Block, Scene::Ball, Scene::Slab, Scene::Drop}) {
+        const ParticleSet ps = generateScene(scene, sp);
+        for (double voxel : {0.5, 1.0, 2.0})
+            for (double support : {4.0, 8.0}) {
+                Params p = Params::fromRadius(sp.radius);
+                p.voxelSize = voxel * sp.radius, p.influenceRadius = support * sp.radius;
+                expectSameField(ps, p, std::string(sceneName(scene)) + "_voxel" + std::to_string(voxel) + "_R" + std::to_string(support));
+            }
+        Params zb = Params::fromRadius(sp.radius);
+        zb.field = FieldKind::Zb05;
+        expectSameField(ps, zb, std::string(sceneName(scene)) + "_zb05");
+        Params full = Params::fromRadius(sp.radius);
+        full.method = FieldMethod::GatherFull;
+        expectSameField(ps, full, std::string(sceneName(scene)) + "_gather_full");
+    }
+    // Per-particle radii (pscale) and isolated particles kept as spheres.
+    ParticleSet ps = generateScene(Scene::Drop, sp);
+    Attribute pscale;
+    pscale.name = "pscale";
+    pscale.floats.resize(ps.size());
+    for (size_t i = 0; i < ps.size(); ++i) pscale.floats[i] = float(sp.radius * (0.8 + 0.4 * double(i % 7) / 6));
+    ps.attributes.push_back(pscale);
+    Params p = Params::fromRadius(sp.radius);
+    p.keepIsolated = true;
+    expectSameField(ps, p, "drop_pscale_keep_isolated");
+}
+
+TEST(FieldCuda, RequestWithoutGpuFailsClearly)
+{
+    std::string why;
+    if (field::cudaUsable(&why)) GTEST_SKIP() << "a GPU is present: this checks the no-GPU path";
+    SceneParams sp;
+    sp.count = 1000;
+    const ParticleSet ps = generateScene(Scene::Block, sp);
+    Params p = Params::fromRadius(sp.radius);
+    p.device = Device::Cuda;
+    try {
+        rasterizeParticles(ps, p);
+        ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("CUDA"), std::string::npos) << e.what();
+    }
+    // Auto falls back to the CPU: the same grid as an explicit CPU run.
+    p.device = Device::Auto;
+    const RasterizeResult autoRun = rasterizeParticles(ps, p);
+    EXPECT_EQ(autoRun.stats.device, "cpu");
+    p.device = Device::Cpu;
+    const RasterizeResult cpuRun = rasterizeParticles(ps, p);
+    EXPECT_TRUE(autoRun.grid->tree().hasSameTopology(cpuRun.grid->tree()));
+    EXPECT_THROW(deviceFromName("gpu"), ValueError);
+}
+
+} // namespace
+} // namespace fluidsurf
