@@ -197,6 +197,15 @@ expect_error "mesh: a points VDB has no level set" "no float grid" "$BIN" mesh "
 expect_error "reconstruct: --vdb must be .vdb" "must end in .vdb" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --vdb "$T/bad.ply"
 expect_error "mesh: unknown mesher" "mesher" "$BIN" mesh "$T/drop_ls.vdb" --mesher dual -o "$T/bad.obj"
 check "mesh: no output after errors" bash -c "[ ! -e '$T/bad.obj' ] && [ ! -e '$T/bad.stl' ]"
+# --device: auto always works; cuda works on a GPU machine and otherwise fails with one clear line.
+check "rasterize --device auto" "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/auto.vdb" --device auto -q
+if "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/gpu.vdb" --device cuda -q 2>/dev/null; then
+    check "rasterize --device cuda wrote a level set" test -s "$T/gpu.vdb"
+else
+    expect_error "rasterize --device cuda without a GPU" "CUDA" "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/gpu.vdb" --device cuda
+    check "no output after the CUDA error" test ! -e "$T/gpu.vdb"
+fi
+expect_error "rasterize: unknown device" "device" "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/bad.vdb" --device tpu
 if [ -f "$SHARED/real/hilbert_46843_particles.bgeo" ]; then
     check "reconstruct hilbert: valid OBJ with normals" bash -c "'$BIN' reconstruct '$SHARED/real/hilbert_46843_particles.bgeo' -r 0.025 -o '$T/hilbert.obj' -q && /usr/bin/python3 '$T/objcheck.py' '$T/hilbert.obj' >/dev/null"
 fi
