@@ -73,6 +73,7 @@ struct Row
     double median = 0, peak = 0, evalRate = 0;
     size_t evaluations = 0, activeVoxels = 0;
     std::map<std::string, double> stages;
+    std::string gpu;  ///< with CUDA: the GPU's own timings (median of the runs), for a note line
 };
 
 Row runOurs(const Case& c, const Params& p, int threads, int repeat, const std::string& label)
@@ -82,12 +83,24 @@ Row runOurs(const Case& c, const Params& p, int threads, int repeat, const std::
     std::map<std::string, std::vector<double>> stages;
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     resetPeakRss();
+    std::map<std::string, std::vector<double>> gpu;
+    size_t gpuBytes = 0;
+    std::string device;
     for (int k = 0; k < repeat; ++k) {
         const RasterizeResult r = rasterizeParticles(c.particles, p);
         totals.push_back(r.stats.totalSeconds());
         for (const StageTime& s : r.stats.stages) stages[s.name].push_back(s.seconds);
+        for (const StageTime& s : r.stats.gpuStages) gpu[s.name].push_back(s.seconds);
+        gpuBytes = r.stats.gpuBytes, device = r.stats.device;
         row.evaluations = r.stats.fieldEvaluations;
         row.activeVoxels = r.stats.activeVoxels;
+    }
+    if (!gpu.empty()) {
+        char buf[256];
+        std::snprintf(buf, sizeof(buf), "%s on %s: upload %.2f ms, gather kernel %.2f ms, download %.2f ms, %.1f MiB",
+                      c.name.c_str(), device.c_str(), median(gpu["upload"]) * 1e3, median(gpu["gather kernel"]) * 1e3,
+                      median(gpu["download"]) * 1e3, double(gpuBytes) / (1 << 20));
+        row.gpu = buf;
     }
     row.peak = peakRssMiB();
     row.median = median(totals);
@@ -121,6 +134,7 @@ int runFieldBench(const FieldBenchOptions& o)
     std::printf("| scene | particles | voxel | R | method | threads | field stage s | stages s | evaluations | M evals/s "
                 "| active voxels | peak RSS MiB | time / narrow band |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     const std::vector<std::string> methods = split(o.methods);
+    std::vector<std::string> gpuNotes;
     for (const Case& c : loadCases(o.scenes, o.shared))
         for (const std::string& v : split(o.voxels))
             for (const std::string& s : split(o.supports)) {
@@ -129,7 +143,14 @@ int runFieldBench(const FieldBenchOptions& o)
                 p.influenceRadius = std::stod(s) * c.radius;
                 double reference = 0;
                 for (const std::string& m : methods) {
-                    if (m == "narrow-band" || m == "narrow-band-1") {
+                    if (m == "narrow-band-cuda") {
+                        p.method = FieldMethod::NarrowBand;
+                        p.device = Device::Cuda;
+                        const Row r = runOurs(c, p, hw, o.repeat, "narrow band, CUDA gather");
+                        p.device = Device::Cpu;
+                        printRow(r, reference);
+                        gpuNotes.push_back(r.gpu);
+                    } else if (m == "narrow-band" || m == "narrow-band-1") {
                         p.method = FieldMethod::NarrowBand;
                         const Row r = runOurs(c, p, m == "narrow-band" ? hw : 1, o.repeat, "narrow band");
                         if (m == "narrow-band") reference = r.median;
@@ -158,6 +179,10 @@ int runFieldBench(const FieldBenchOptions& o)
                     }
                 }
             }
+    if (!gpuNotes.empty()) {
+        std::printf("\nGPU timings (CUDA events, medians; inside the field stage above):\n\n");
+        for (const std::string& n : gpuNotes) std::printf("- %s\n", n.c_str());
+    }
     return 0;
 }
 

@@ -25,8 +25,8 @@ int main(int argc, char** argv)
     fieldCmd->add_option("--scenes", field.scenes, "real, hilbert, drop-1M, block-4M, ... (comma-separated)")->capture_default_str();
     fieldCmd->add_option("--voxel", field.voxels, "voxel sizes in r (comma-separated)")->capture_default_str();
     fieldCmd->add_option("--support", field.supports, "influence radii R in r (comma-separated)")->capture_default_str();
-    fieldCmd->add_option("--methods", field.methods, "narrow-band, narrow-band-1 (one thread), gather-full, scatter, "
-                                                     "p2ls, smooth")->capture_default_str();
+    fieldCmd->add_option("--methods", field.methods, "narrow-band, narrow-band-1 (one thread), narrow-band-cuda, "
+                                                     "gather-full, scatter, p2ls, smooth")->capture_default_str();
     fieldCmd->add_option("--repeat", field.repeat, "runs per case (median)")->capture_default_str();
     fieldCmd->add_option("--shared", field.shared, "../shared/data")->capture_default_str();
     fluidsurf::bench::MeshBenchOptions mesh;
