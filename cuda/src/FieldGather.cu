@@ -4,6 +4,7 @@
 #include <fluidsurf/cuda/FieldGather.h>
 
 #include "Check.cuh"
+#include "Morton.cuh"
 #include "field/FieldMath.h"
 
 #include <memory>
@@ -33,17 +34,6 @@ struct Params
     field::FieldConstants constants;
     float* out;
 };
-
-__device__ __forceinline__ unsigned long long spreadBits(unsigned long long v)
-{
-    v &= 0x1fffff;
-    v = (v | (v << 32)) & 0x001f00000000ffffull;
-    v = (v | (v << 16)) & 0x001f0000ff0000ffull;
-    v = (v | (v << 8)) & 0x100f00f00f00f00full;
-    v = (v | (v << 4)) & 0x10c30c30c30c30c3ull;
-    v = (v | (v << 2)) & 0x1249249249249249ull;
-    return v;
-}
 
 /// Cell coordinate along an axis, clamped to [-1, dims] like the CPU's CellIndex::cellCoord.
 __device__ __forceinline__ long long cellCoord(const Params& p, double v, int axis)
@@ -107,7 +97,7 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
         for (long long c = chunk + threadIdx.x; c < chunk + kCellChunk && c < boxCells; c += kThreads) {
             const long long cx = c0[0] + c % nx, cy = c0[1] + (c / nx) % ny, cz = c0[2] + c / (nx * ny);
             if (cx < 0 || cy < 0 || cz < 0 || cx >= p.cellDims[0] || cy >= p.cellDims[1] || cz >= p.cellDims[2]) continue;
-            const long long at = findCell(p, spreadBits(cx) | spreadBits(cy) << 1 | spreadBits(cz) << 2);
+            const long long at = findCell(p, mortonKey(cx, cy, cz));
             if (at < 0) continue;
             const int slot = atomicAdd(&cellsInChunk, 1);
             cellBegin[slot] = p.starts[at];

@@ -3,6 +3,7 @@
 #include <fluidsurf/cuda/Device.h>
 
 #include "Check.cuh"
+#include "Morton.cuh"
 
 #include <memory>
 
@@ -10,18 +11,6 @@ namespace fluidsurf {
 namespace cuda {
 
 namespace {
-
-/// Spread the low 21 bits of v so that bit i moves to bit 3i.
-__device__ __forceinline__ uint64_t spreadBits(uint64_t v)
-{
-    v &= 0x1fffff;
-    v = (v | (v << 32)) & 0x001f00000000ffffull;
-    v = (v | (v << 16)) & 0x001f0000ff0000ffull;
-    v = (v | (v << 8)) & 0x100f00f00f00f00full;
-    v = (v | (v << 4)) & 0x10c30c30c30c30c3ull;
-    v = (v | (v << 2)) & 0x1249249249249249ull;
-    return v;
-}
 
 __device__ __forceinline__ uint64_t cellOf(float p, float o, float inv)
 {
@@ -35,8 +24,7 @@ __global__ void mortonKernel(const float3* __restrict__ pos, size_t n, float3 or
     const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i >= n) return;
     const float3 p = pos[i];
-    codes[i] = spreadBits(cellOf(p.x, origin.x, inv)) | (spreadBits(cellOf(p.y, origin.y, inv)) << 1) |
-               (spreadBits(cellOf(p.z, origin.z, inv)) << 2);
+    codes[i] = mortonKey(cellOf(p.x, origin.x, inv), cellOf(p.y, origin.y, inv), cellOf(p.z, origin.z, inv));
 }
 
 struct DeviceFree
