@@ -3,11 +3,7 @@
 // same code the CPU runs.
 #include <fluidsurf/cuda/FieldGather.h>
 
-#include "Check.cuh"
-#include "Morton.cuh"
-#include "field/FieldMath.h"
-
-#include <memory>
+#include "Stages.cuh"
 
 namespace fluidsurf {
 namespace cuda {
@@ -36,14 +32,14 @@ struct Params
 };
 
 /// Cell coordinate along an axis, clamped to [-1, dims] like the CPU's CellIndex::cellCoord.
-__device__ __forceinline__ long long cellCoord(const Params& p, double v, int axis)
+__device__ __forceinline__ long long boxCellCoord(const Params& p, double v, int axis)
 {
     const double c = floor((v - p.cellOrigin[axis]) / p.cellSize);
     return (long long)fmin(fmax(c, -1.0), double(p.cellDims[axis]));
 }
 
 /// Position of key among the sorted occupied keys, or -1.
-__device__ long long findCell(const Params& p, unsigned long long key)
+__device__ long long searchCell(const Params& p, unsigned long long key)
 {
     unsigned long long lo = 0, hi = p.cellCount;
     while (lo < hi) {
@@ -84,8 +80,8 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
     // The occupied cells overlapping the leaf's voxel box widened by R.
     long long c0[3], c1[3];
     for (int a = 0; a < 3; ++a) {
-        c0[a] = cellCoord(p, o[a] - p.R, a);
-        c1[a] = cellCoord(p, o[a] + 7 * p.dx + p.R, a);
+        c0[a] = boxCellCoord(p, o[a] - p.R, a);
+        c1[a] = boxCellCoord(p, o[a] + 7 * p.dx + p.R, a);
     }
     const long long nx = c1[0] - c0[0] + 1, ny = c1[1] - c0[1] + 1, nz = c1[2] - c0[2] + 1;
     const long long boxCells = nx * ny * nz;
@@ -97,7 +93,7 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
         for (long long c = chunk + threadIdx.x; c < chunk + kCellChunk && c < boxCells; c += kThreads) {
             const long long cx = c0[0] + c % nx, cy = c0[1] + (c / nx) % ny, cz = c0[2] + c / (nx * ny);
             if (cx < 0 || cy < 0 || cz < 0 || cx >= p.cellDims[0] || cy >= p.cellDims[1] || cz >= p.cellDims[2]) continue;
-            const long long at = findCell(p, mortonKey(cx, cy, cz));
+            const long long at = searchCell(p, mortonKey(cx, cy, cz));
             if (at < 0) continue;
             const int slot = atomicAdd(&cellsInChunk, 1);
             cellBegin[slot] = p.starts[at];
@@ -169,53 +165,29 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
     }
 }
 
-struct DeviceFree
-{
-    void operator()(void* p) const { cudaFree(p); }
-};
-
-/// Device copies that are freed on every path.
-class DeviceBuffers
-{
-public:
-    template <typename T>
-    T* upload(const T* host, size_t count, cudaStream_t stream)
-    {
-        T* d = alloc<T>(count);
-        if (count) FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(d, host, count * sizeof(T), cudaMemcpyHostToDevice, stream));
-        return d;
-    }
-    template <typename T>
-    T* alloc(size_t count)
-    {
-        void* d = nullptr;
-        FLUIDSURF_CUDA_CHECK(cudaMalloc(&d, count ? count * sizeof(T) : 1));
-        mBuffers.emplace_back(d);
-        mBytes += count * sizeof(T);
-        return static_cast<T*>(d);
-    }
-    size_t bytes() const { return mBytes; }
-
-private:
-    std::vector<std::unique_ptr<void, DeviceFree>> mBuffers;
-    size_t mBytes = 0;
-};
-
-struct Event
-{
-    cudaEvent_t e = nullptr;
-    Event() { FLUIDSURF_CUDA_CHECK(cudaEventCreate(&e)); }
-    ~Event() { cudaEventDestroy(e); }
-};
-
-float elapsedMs(const Event& a, const Event& b)
-{
-    float ms = 0;
-    FLUIDSURF_CUDA_CHECK(cudaEventElapsedTime(&ms, a.e, b.e));
-    return ms;
-}
-
 } // namespace
+
+void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsigned long long* masks,
+                  size_t leafCount, double voxelSize, const field::FieldConstants& constants, float* out,
+                  cudaStream_t stream)
+{
+    if (leafCount == 0) return;
+    Params p{};
+    p.positions = cells.positions;
+    p.radii = cells.radii;
+    p.keys = cells.keys;
+    p.starts = cells.starts;
+    p.cellCount = cells.cellCount;
+    p.cellSize = cells.cellSize;
+    for (int a = 0; a < 3; ++a) p.cellOrigin[a] = cells.origin[a], p.cellDims[a] = cells.dims[a];
+    p.leafOrigins = origins;
+    p.leafActive = masks;
+    p.dx = voxelSize, p.R = constants.influenceRadius;
+    p.constants = constants;
+    p.out = out;
+    gatherKernel<<<unsigned(leafCount), kThreads, 0, stream>>>(p);
+    FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+}
 
 std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* streamPtr)
 {
@@ -223,40 +195,40 @@ std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* 
     if (in.leafCount == 0) return out;
     if (!(in.cellSize > 0 && in.voxelSize > 0 && in.influenceRadius > 0)) throw Error("gatherField: invalid sizes");
     cudaStream_t stream = static_cast<cudaStream_t>(streamPtr);
-    Event start, uploaded, computed, done;
-    DeviceBuffers buffers;
-    FLUIDSURF_CUDA_CHECK(cudaEventRecord(start.e, stream));
-    Params p{};
+    DeviceMemory mem(stream);
+    StageEvents events(stream);
     static_assert(sizeof(Vec3f) == sizeof(float3), "Vec3f must be three packed floats");
-    p.positions = buffers.upload(reinterpret_cast<const float3*>(in.positions), in.particleCount, stream);
-    p.radii = in.radii ? buffers.upload(in.radii, in.particleCount, stream) : nullptr;
-    p.keys = buffers.upload(reinterpret_cast<const unsigned long long*>(in.cellKeys), in.cellCount, stream);
-    p.starts = buffers.upload(in.cellStarts, in.cellCount + 1, stream);
-    p.cellCount = in.cellCount;
-    p.cellSize = in.cellSize;
-    for (int a = 0; a < 3; ++a) p.cellOrigin[a] = in.cellOrigin[a], p.cellDims[a] = int(in.cellDims[a]);
-    p.leafOrigins = buffers.upload(in.leafOrigins, 3 * in.leafCount, stream);
-    p.leafActive = buffers.upload(reinterpret_cast<const unsigned long long*>(in.leafActive), 8 * in.leafCount, stream);
-    p.dx = in.voxelSize, p.R = in.influenceRadius;
-    p.constants.influenceRadius = in.influenceRadius;
-    p.constants.radius = in.radius;
-    p.constants.perParticleRadii = in.radii != nullptr;
-    p.constants.ssp07 = in.ssp07;
-    p.constants.tLow = in.tLow, p.constants.tHigh = in.tHigh;
-    p.constants.background = in.background;
-    p.out = buffers.alloc<float>(out.size());
-    FLUIDSURF_CUDA_CHECK(cudaEventRecord(uploaded.e, stream));
-    gatherKernel<<<unsigned(in.leafCount), kThreads, 0, stream>>>(p);
-    FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    FLUIDSURF_CUDA_CHECK(cudaEventRecord(computed.e, stream));
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), p.out, out.size() * sizeof(float), cudaMemcpyDeviceToHost, stream));
-    FLUIDSURF_CUDA_CHECK(cudaEventRecord(done.e, stream));
+    DeviceCells cells;
+    cells.count = in.particleCount;
+    cells.positions = mem.upload(reinterpret_cast<const float3*>(in.positions), in.particleCount);
+    cells.radii = in.radii ? mem.upload(in.radii, in.particleCount) : nullptr;
+    cells.keys = mem.upload(reinterpret_cast<const unsigned long long*>(in.cellKeys), in.cellCount);
+    cells.starts = mem.upload(in.cellStarts, in.cellCount + 1);
+    cells.cellCount = in.cellCount;
+    cells.cellSize = in.cellSize;
+    for (int a = 0; a < 3; ++a) cells.origin[a] = in.cellOrigin[a], cells.dims[a] = int(in.cellDims[a]);
+    const int32_t* origins = mem.upload(in.leafOrigins, 3 * in.leafCount);
+    const unsigned long long* masks = mem.upload(reinterpret_cast<const unsigned long long*>(in.leafActive), 8 * in.leafCount);
+    field::FieldConstants constants;
+    constants.influenceRadius = in.influenceRadius;
+    constants.radius = in.radius;
+    constants.perParticleRadii = in.radii != nullptr;
+    constants.ssp07 = in.ssp07;
+    constants.tLow = in.tLow, constants.tHigh = in.tHigh;
+    constants.background = in.background;
+    float* values = mem.alloc<float>(out.size());
+    events.mark("upload");
+    gatherLeaves(cells, origins, masks, in.leafCount, in.voxelSize, constants, values, stream);
+    events.mark("gather kernel");
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float), cudaMemcpyDeviceToHost, stream));
+    events.mark("download");
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
     if (times) {
-        times->uploadMs = elapsedMs(start, uploaded);
-        times->kernelMs = elapsedMs(uploaded, computed);
-        times->downloadMs = elapsedMs(computed, done);
-        times->deviceBytes = buffers.bytes();
+        const auto stages = events.stages();
+        times->uploadMs = stages[0].second;
+        times->kernelMs = stages[1].second;
+        times->downloadMs = stages[2].second;
+        times->deviceBytes = mem.peakBytes();
     }
     return out;
 }

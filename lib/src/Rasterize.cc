@@ -53,34 +53,13 @@ std::vector<float> particleRadii(const ParticleSet& ps, const Params& params)
                              std::to_string(a->floats[i]) + "; radii must be positive (or ignore the attribute)");
     return a->floats;
 }
-} // namespace
 
-RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, const std::string& source)
+/// neighbors -> classify -> band (or bounding volume) -> field -> completion on the CPU, with
+/// the field gather on the GPU when onGpu.
+openvdb::FloatTree::Ptr cpuStages(const ParticleSet& ps, const std::vector<float>& radii, const Params& params,
+                                  bool onGpu, RasterizeResult& result, StageClock& clock)
 {
-    params.validate();
-    ps.validate();
-    openvdb::initialize();
-    for (size_t i = 0; i < ps.size(); ++i)
-        if (!ps.positions[i].isFinite())
-            throw ValueError("particle " + std::to_string(i) + " has a non-finite position");
-    if (params.device == Device::Cuda && params.method == FieldMethod::Scatter)
-        throw ValueError("the scatter baseline runs on the CPU only (--device cpu)");
-    // Looking for the GPU (and creating its context) overlaps the CPU stages; the answer is
-    // needed at the field stage.
-    struct GpuCheck { bool usable = false; std::string reason; };
-    std::future<GpuCheck> gpuCheck;
-    if (params.device != Device::Cpu && params.method != FieldMethod::Scatter)
-        gpuCheck = std::async(std::launch::async, [] {
-            GpuCheck c;
-            c.usable = field::cudaUsable(&c.reason);
-            return c;
-        });
-    RasterizeResult result;
     RasterizeStats& stats = result.stats;
-    stats.particles = ps.size();
-    StageClock clock(stats.stages);
-
-    const std::vector<float> radii = particleRadii(ps, params);
     const double cellSize = std::min(params.influenceRadius, params.smoothingLength);
     neighbors::CellIndex index =
         neighbors::buildCellIndex(ps.positions.data(), radii.empty() ? nullptr : radii.data(), ps.size(), cellSize);
@@ -97,9 +76,6 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
 
     const float background = float(params.background());
     openvdb::FloatTree::Ptr tree;
-    float maxRadius = float(params.radius);
-    for (float r : radii) maxRadius = std::max(maxRadius, r);
-    stats.bandWidth = narrowband::effectiveBandWidth(params, maxRadius);
     if (params.method == FieldMethod::NarrowBand) {
         const openvdb::MaskTree::Ptr band = narrowband::buildNarrowBand(index, classes, params, stats.bandWidth);
         tree = std::make_shared<openvdb::FloatTree>(*band, background, openvdb::TopologyCopy());
@@ -120,13 +96,6 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
         }
         clock.done("bounding volume");
     }
-    bool onGpu = false;
-    if (gpuCheck.valid()) {
-        const GpuCheck gpu = gpuCheck.get();
-        if (params.device == Device::Cuda && !gpu.usable)
-            throw Error("CUDA was requested but there is no usable GPU: " + gpu.reason);
-        onGpu = gpu.usable;
-    }
     if (params.method == FieldMethod::Scatter) {
         tree = field::scatterField(index, params, &stats.fieldEvaluations);
     } else if (onGpu) {
@@ -140,6 +109,60 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
         stats.fieldEvaluations += stats.bandCompletion;
         clock.done("complete band");
     }
+    return tree;
+}
+} // namespace
+
+void prepareDevice(Device device)
+{
+    if (device == Device::Cpu) return;
+    // Held until exit: the future's destructor waits for the context, never a half-made one.
+    static std::future<void> opening = std::async(std::launch::async, [] { field::cudaUsable(); });
+}
+
+RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, const std::string& source)
+{
+    params.validate();
+    ps.validate();
+    openvdb::initialize();
+    for (size_t i = 0; i < ps.size(); ++i)
+        if (!ps.positions[i].isFinite())
+            throw ValueError("particle " + std::to_string(i) + " has a non-finite position");
+    if (params.device == Device::Cuda && params.method == FieldMethod::Scatter)
+        throw ValueError("the scatter baseline runs on the CPU only (--device cpu)");
+    // Looking for the GPU (and creating its context, unless the caller did earlier) runs on a
+    // thread while the radii are checked.
+    struct GpuCheck { bool usable = false; std::string reason; };
+    std::future<GpuCheck> gpuCheck;
+    if (params.device != Device::Cpu && params.method != FieldMethod::Scatter)
+        gpuCheck = std::async(std::launch::async, [] {
+            GpuCheck c;
+            c.usable = field::cudaUsable(&c.reason);
+            return c;
+        });
+    RasterizeResult result;
+    RasterizeStats& stats = result.stats;
+    stats.particles = ps.size();
+    StageClock clock(stats.stages);
+
+    const std::vector<float> radii = particleRadii(ps, params);
+    float maxRadius = float(params.radius);
+    for (float r : radii) maxRadius = std::max(maxRadius, r);
+    stats.bandWidth = narrowband::effectiveBandWidth(params, maxRadius);
+
+    bool onGpu = false;
+    if (gpuCheck.valid()) {
+        const GpuCheck gpu = gpuCheck.get();
+        if (params.device == Device::Cuda && !gpu.usable)
+            throw Error("CUDA was requested but there is no usable GPU: " + gpu.reason);
+        onGpu = gpu.usable;
+    }
+    // The narrow band runs on the device from the sort on; gather-full only gathers there.
+    openvdb::FloatTree::Ptr tree;
+    if (onGpu && params.method == FieldMethod::NarrowBand && ps.size() > 0)
+        tree = field::rasterizeNarrowBandCuda(ps.positions, radii, params, stats.bandWidth, stats,
+                                              result.isolatedParticles, [&](const char* name) { clock.done(name); });
+    if (!tree) tree = cpuStages(ps, radii, params, onGpu, result, clock);
 
     levelset::GridInfo info;
     info.particles = ps.size();

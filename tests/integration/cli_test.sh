@@ -201,6 +201,11 @@ check "mesh: no output after errors" bash -c "[ ! -e '$T/bad.obj' ] && [ ! -e '$
 check "rasterize --device auto" "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/auto.vdb" --device auto -q
 if "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/gpu.vdb" --device cuda -q 2>/dev/null; then
     check "rasterize --device cuda wrote a level set" test -s "$T/gpu.vdb"
+    # The device pipeline gives the CPU's classes and active voxels (the summary line), and a
+    # watertight mesh.
+    summary() { "$BIN" rasterize "$T/drop.bgeo" -r 0.01 -o "$T/$1.vdb" --device "$1" | grep -o '([0-9].*active voxels'; }
+    check "rasterize --device cuda: same classes and active voxels as cpu" bash -c "[ \"$(summary cuda)\" = \"$(summary cpu)\" ] && [ -n \"$(summary cpu)\" ]"
+    check "reconstruct --device cuda --check: watertight" bash -c "'$BIN' reconstruct '$T/drop.bgeo' -r 0.01 -o '$T/gpu.obj' --device cuda --check | grep -q watertight"
 else
     expect_error "rasterize --device cuda without a GPU" "CUDA" "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/gpu.vdb" --device cuda
     check "no output after the CUDA error" test ! -e "$T/gpu.vdb"

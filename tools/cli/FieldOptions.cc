@@ -26,7 +26,7 @@ double peakRssMiB()
 
 void printDevice(const RasterizeStats& s)
 {
-    std::printf("  field gather on %s", s.device.c_str());
+    std::printf("  field on %s", s.device.c_str());
     if (!s.gpuStages.empty()) {
         std::printf(" (CUDA events:");
         for (const StageTime& st : s.gpuStages) std::printf(" %s %.2f ms", st.name.c_str(), st.seconds * 1e3);
@@ -77,7 +77,7 @@ void addFieldOptions(CLI::App* cmd, FieldOptions& o)
     cmd->add_option("--field", o.field, "ssp07 or zb05")->capture_default_str()->check(CLI::IsMember({"ssp07", "zb05"}));
     cmd->add_option("--method", o.method, "narrow-band, or the baselines gather-full and scatter")
         ->capture_default_str()->check(CLI::IsMember({"narrow-band", "gather-full", "scatter"}));
-    cmd->add_option("--device", o.device, "cpu, cuda (field gather on the GPU) or auto (cuda when a usable GPU is present)")
+    cmd->add_option("--device", o.device, "cpu, cuda (the narrow band on the GPU: sort, classify, band and gather; gather-full gathers there) or auto (cuda when a usable GPU is present)")
         ->capture_default_str()->check(CLI::IsMember({"cpu", "cuda", "auto"}));
     cmd->add_flag("--ignore-radius-attribute", o.ignoreRadiusAttribute, "use r for every particle even with pscale");
     cmd->add_flag("--keep-isolated", o.keepIsolated, "isolated particles become spheres of radius r in the grid");
@@ -101,6 +101,8 @@ Params makeParams(const FieldOptions& o, double radius)
     p.device = deviceFromName(o.device);
     return p;
 }
+
+void prepareDevice(const FieldOptions& o) { fluidsurf::prepareDevice(deviceFromName(o.device)); }
 
 } // namespace cli
 } // namespace fluidsurf

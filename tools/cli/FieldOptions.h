@@ -30,6 +30,9 @@ double chooseRadius(const FieldOptions& o, const ParticleSet& ps, bool print);
 
 Params makeParams(const FieldOptions& o, double radius);
 
+/// With --device cuda or auto: start creating the CUDA context now, while the first frame is read.
+void prepareDevice(const FieldOptions& o);
+
 double peakRssMiB();
 /// With -v: where the field gather ran, and the GPU's own timings when it was a GPU.
 void printDevice(const RasterizeStats& stats);

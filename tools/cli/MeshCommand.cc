@@ -141,6 +141,7 @@ Runner addReconstructCommand(CLI::App& app)
         const auto threads = limitThreads(o->threads);
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
+        prepareDevice(o->field);
         Progress bar(jobs.size(), "reconstruct", o->quiet);
         double radius = 0;
         for (size_t i = 0; i < jobs.size(); ++i) {

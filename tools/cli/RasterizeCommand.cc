@@ -56,6 +56,7 @@ Runner addRasterizeCommand(CLI::App& app)
             threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o->threads);
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
+        prepareDevice(o->field);
         Progress bar(jobs.size(), "rasterize", o->quiet);
         double radius = 0;
         const auto start = std::chrono::steady_clock::now();
@@ -87,10 +88,12 @@ Runner addRasterizeCommand(CLI::App& app)
                 double fieldSeconds = 0;
                 for (const StageTime& st : s.stages)
                     if (st.name == "field") fieldSeconds = st.seconds;
-                std::printf("  field evaluations %zu (%.1f M/s; %zu of them completing the band), band half "
-                            "width %g r, voxel %g r\n",
-                            s.fieldEvaluations, s.fieldEvaluations / std::max(1e-9, fieldSeconds) * 1e-6,
-                            s.bandCompletion, s.bandWidth / radius, o->field.voxel);
+                // The device pipeline has no separate field stage: its gather is inside "device field".
+                char rate[48] = "";
+                if (fieldSeconds > 0)
+                    std::snprintf(rate, sizeof(rate), "%.1f M/s; ", s.fieldEvaluations / fieldSeconds * 1e-6);
+                std::printf("  field evaluations %zu (%s%zu of them completing the band), band half width %g r, voxel %g r\n",
+                            s.fieldEvaluations, rate, s.bandCompletion, s.bandWidth / radius, o->field.voxel);
                 printDevice(s);
                 std::printf("  peak memory %.1f MiB\n", peakRssMiB());
             }

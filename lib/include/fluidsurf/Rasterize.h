@@ -50,6 +50,11 @@ struct RasterizeResult
     RasterizeStats stats;
 };
 
+/// Start looking for the GPU and creating its CUDA context (0.1-0.3 s) on a thread of its own, so
+/// that this overlaps reading the particles; a later rasterizeParticles with Device::Cuda or Auto
+/// finds it ready. Does nothing for Device::Cpu or without the CUDA backend. Never throws.
+void prepareDevice(Device device);
+
 /// Particle radii: with params.perParticleRadii and a radius attribute (pscale), r_j comes from
 /// it; otherwise r_j = params.radius. sourceName goes into the grid metadata.
 /// ValueError for invalid parameters or an input that cannot be gridded.

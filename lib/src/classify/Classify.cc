@@ -26,6 +26,17 @@ struct Neighbourhood
 };
 } // namespace
 
+KernelConstants kernelConstants(const Params& params)
+{
+    KernelConstants k;
+    k.h = params.smoothingLength;
+    k.h2 = float(k.h * k.h);
+    k.poly6 = 315.0 / (64.0 * M_PI * std::pow(k.h, 9));
+    k.gradientScale = 6 * k.poly6 * k.h;
+    k.uniformVolume = std::pow(2 * params.radius, 3);
+    return k;
+}
+
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params)
 {
     const size_t n = index.size();
@@ -34,10 +45,9 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     out.neighbours.assign(n, 0);
     out.colorField.assign(n, 0.f);
     out.colorGradient.assign(n, 0.f);
-    const double h = params.smoothingLength;
-    const float h2 = float(h * h);
-    const double poly6 = 315.0 / (64.0 * M_PI * std::pow(h, 9));
-    const double uniformVolume = std::pow(2 * params.radius, 3);
+    const KernelConstants k = kernelConstants(params);
+    const double h = k.h, poly6 = k.poly6, uniformVolume = k.uniformVolume;
+    const float h2 = k.h2;
 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, index.cellCount(), 16), [&](const tbb::blocked_range<size_t>& cells) {
         Neighbourhood nb;
@@ -84,7 +94,7 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
                 double cnt = 0, sum = 0, g[3] = {0, 0, 0};
                 for (int l = 0; l < kLanes; ++l) cnt += count[l], sum += cf[l], g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
                 // |grad cf| * h: dimensionless, 0 inside, 0.62 on a flat lattice face.
-                const float gradient = float(6 * poly6 * h * std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]));
+                const float gradient = float(k.gradientScale * std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]));
                 const uint32_t neighbours = uint32_t(cnt) - 1;  // self is at distance 0
                 const float colorField = float(sum * poly6);
                 out.neighbours[i] = neighbours;

@@ -40,6 +40,18 @@ struct Classification
     size_t interior = 0, surface = 0, splash = 0, isolated = 0;  ///< surface excludes splash
 };
 
+/// The kernel constants, computed once here for the CPU and the CUDA classification alike (the
+/// two must round identically).
+struct KernelConstants
+{
+    double h = 0;              ///< smoothing length
+    float h2 = 0;              ///< float(h * h)
+    double poly6 = 0;          ///< 315 / (64 pi h^9)
+    double gradientScale = 0;  ///< 6 poly6 h: |grad cf| h = gradientScale |sum V t^2 d|
+    double uniformVolume = 0;  ///< (2r)^3
+};
+KernelConstants kernelConstants(const Params& params);
+
 /// Parallel over occupied cells; each cell gathers its neighbourhood once.
 /// uniformRadius is used when the index has no per-particle radii.
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params);

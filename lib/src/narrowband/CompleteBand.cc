@@ -83,6 +83,11 @@ struct FrontierFinder
 
 size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& particles, const Params& params)
 {
+    return completeBand(tree, params, [&](openvdb::FloatTree& grown) { field::evaluateField(grown, particles, params); });
+}
+
+size_t completeBand(openvdb::FloatTree& tree, const Params& params, const FieldEvaluator& evaluate)
+{
     const float threshold = float(0.5 * params.voxelSize);
     size_t added = 0;
     // The first round scans the whole band; later rounds only the voxels the previous one added
@@ -97,7 +102,7 @@ size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& partic
         const size_t count = finder.front->activeVoxelCount();
         if (count == 0) break;
         auto grown = std::make_shared<openvdb::FloatTree>(*finder.front, tree.background(), openvdb::TopologyCopy());
-        field::evaluateField(*grown, particles, params);
+        evaluate(*grown);
         openvdb::tree::ValueAccessor<openvdb::FloatTree> acc(tree);
         for (auto v = grown->cbeginValueOn(); v; ++v) acc.setValue(v.getCoord(), *v);
         added += count;

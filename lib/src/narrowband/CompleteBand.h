@@ -17,10 +17,18 @@
 
 #include <openvdb/openvdb.h>
 
+#include <functional>
+
 namespace fluidsurf {
 namespace narrowband {
 
-/// Returns the number of voxels added (and evaluated).
+/// Fills every active voxel of a tree with phi (the CPU gather, or the GPU's).
+using FieldEvaluator = std::function<void(openvdb::FloatTree&)>;
+
+/// Returns the number of voxels added (and evaluated by evaluate).
+size_t completeBand(openvdb::FloatTree& tree, const Params& params, const FieldEvaluator& evaluate);
+
+/// The same with the CPU gather over particles.
 size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& particles, const Params& params);
 
 } // namespace narrowband

@@ -75,6 +75,21 @@ CellRange CellIndex::find(int64_t cx, int64_t cy, int64_t cz) const
     }
 }
 
+void cellGrid(const BBox3f& box, double cellSize, double origin[3], uint32_t dims[3])
+{
+    for (int a = 0; a < 3; ++a) {
+        // Cells counted from the one holding the lowest particle, so cellCoord's -1 sentinel
+        // below the grid is never occupied.
+        origin[a] = std::floor(double(box.min[a]) / cellSize) * cellSize;
+        const double cells = std::floor((double(box.max[a]) - origin[a]) / cellSize) + 1;
+        if (!(cells < double(kMaxCellsPerAxis)))
+            throw ValueError("the particles span " + std::to_string(cells) + " cells of size " +
+                             std::to_string(cellSize) + " along " + "xyz"[a] +
+                             " (at most 2097152): a stray particle extremely far from the fluid?");
+        dims[a] = uint32_t(cells);
+    }
+}
+
 CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, double cellSize)
 {
     if (n >= (size_t(1) << 32) - 1) throw ValueError("more than 2^32 - 2 particles in one frame");
@@ -87,16 +102,7 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
     }
     BBox3f box;
     for (size_t i = 0; i < n; ++i) box.expand(positions[i]);
-    for (int a = 0; a < 3; ++a) {
-        // One empty cell of margin below keeps cellCoord's -1 sentinel unoccupied.
-        index.origin[a] = std::floor(double(box.min[a]) / cellSize) * cellSize;
-        const double cells = std::floor((double(box.max[a]) - index.origin[a]) / cellSize) + 1;
-        if (!(cells < double(kMaxCellsPerAxis)))
-            throw ValueError("the particles span " + std::to_string(cells) + " cells of size " +
-                             std::to_string(cellSize) + " along " + "xyz"[a] +
-                             " (at most 2097152): a stray particle extremely far from the fluid?");
-        index.dims[a] = uint32_t(cells);
-    }
+    cellGrid(box, cellSize, index.origin, index.dims);
     std::vector<Handle> handles(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {

@@ -75,6 +75,11 @@ struct CellIndex
     }
 };
 
+/// The cell grid covering box: origin (a multiple of cellSize, at the corner of the lowest
+/// particle's cell) and cells per axis. ValueError when an axis needs
+/// more than kMaxCellsPerAxis cells. Shared by the CPU index and the CUDA pipeline.
+void cellGrid(const BBox3f& box, double cellSize, double origin[3], uint32_t dims[3]);
+
 /// Sort n particles into cells of the given size (parallel). radii may be null (uniform).
 /// ValueError when the particles span more than kMaxCellsPerAxis cells along an axis.
 CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, double cellSize);

@@ -1,6 +1,8 @@
-// CudaFieldTest.cc - the field gather on the GPU (Params::device = Cuda) against the CPU path:
-// identical active topology, values within 1e-5 r, the same zero crossings. Skipped with the
-// reason where there is no usable GPU (CI); there, a CUDA request must fail with a clear error.
+// CudaFieldTest.cc - the field on the GPU (Params::device = Cuda) against the CPU path: the
+// narrow band computed on the device from the sort on (the same classes, isolated particles and
+// active topology as the CPU; values within 1e-5 r, the same zero crossings), and the gather
+// alone for gather-full. Skipped with the reason where there is no usable GPU (CI); there, a
+// CUDA request must fail with a clear error.
 #include "TestData.h"
 
 #include "field/CudaField.h"
@@ -29,6 +31,17 @@ void expectSameField(const ParticleSet& ps, Params p, const std::string& what)
     p.device = Device::Cuda;
     const RasterizeResult gpu = rasterizeParticles(ps, p, what);
     EXPECT_NE(gpu.stats.device, "cpu") << what;
+    // The narrow band must have run on the device from the sort on, not only its gather.
+    bool deviceClassify = false;
+    for (const StageTime& st : gpu.stats.gpuStages) deviceClassify |= st.name == "classify";
+    EXPECT_EQ(deviceClassify, p.method == FieldMethod::NarrowBand && ps.size() > 0) << what;
+    EXPECT_EQ(gpu.stats.interior, cpu.stats.interior) << what;
+    EXPECT_EQ(gpu.stats.surface, cpu.stats.surface) << what;
+    EXPECT_EQ(gpu.stats.splash, cpu.stats.splash) << what;
+    EXPECT_EQ(gpu.stats.isolated, cpu.stats.isolated) << what;
+    EXPECT_EQ(gpu.isolatedParticles, cpu.isolatedParticles) << what;
+    EXPECT_EQ(gpu.stats.bandCompletion, cpu.stats.bandCompletion) << what;
+    EXPECT_EQ(gpu.stats.fieldEvaluations, cpu.stats.fieldEvaluations) << what;
     ASSERT_TRUE(cpu.grid->tree().hasSameTopology(gpu.grid->tree())) << what << ": active topology differs";
     auto acc = gpu.grid->getConstAccessor();
     double worst = 0;
@@ -81,6 +94,32 @@ TEST(FieldCuda, MatchesCpuOnGeneratedScenesAndSettings)
     Params p = Params::fromRadius(sp.radius);
     p.keepIsolated = true;
     expectSameField(ps, p, "drop_pscale_keep_isolated");
+}
+
+TEST(FieldCuda, MatchesCpuOnSparseAndDegenerateFrames)
+{
+    FLUIDSURF_REQUIRE_GPU();
+    const double r = 0.025;
+    auto frame = [](std::vector<Vec3f> pts) {
+        ParticleSet ps;
+        ps.positions = std::move(pts);
+        return ps;
+    };
+    for (bool keep : {false, true}) {
+        Params p = Params::fromRadius(r);
+        p.keepIsolated = keep;
+        const std::string k = keep ? "_kept" : "_dropped";
+        expectSameField(frame({Vec3f(0.1f, 0.2f, 0.3f)}), p, "one_particle" + k);
+        // All isolated: with the particles dropped the band is empty.
+        expectSameField(frame({Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0), Vec3f(-3, -2, 5)}), p, "isolated" + k);
+        // A pair (splash) plus a far isolated particle, at negative coordinates.
+        expectSameField(frame({Vec3f(-5, -5, -5), Vec3f(-5.04f, -5, -5), Vec3f(7, 7, 7)}), p, "pair" + k);
+    }
+    // A particle exactly on leaf and cell boundaries, and lattice rows at spacing 2r.
+    std::vector<Vec3f> lattice;
+    for (int i = 0; i < 20; ++i)
+        for (int j = 0; j < 3; ++j) lattice.push_back(Vec3f(float(i * 2 * r), float(j * 2 * r), 0.2f));
+    expectSameField(frame(lattice), Params::fromRadius(r), "lattice_rows");
 }
 
 TEST(FieldCuda, RequestWithoutGpuFailsClearly)

@@ -1,0 +1,179 @@
+// NarrowBandPipeline.cu - runs the device stages (Stages.cuh) in order on one stream and moves
+// the leaf blocks back (see fluidsurf/cuda/NarrowBandPipeline.h).
+#include <fluidsurf/cuda/NarrowBandPipeline.h>
+
+#include "Stages.cuh"
+
+#include <algorithm>
+
+namespace fluidsurf {
+namespace cuda {
+
+struct NarrowBandPipeline::Impl
+{
+    cudaStream_t stream = nullptr;
+    bool ownStream = false;
+    std::unique_ptr<DeviceMemory> mem;
+    const float3* inputPositions = nullptr;
+    const float* inputRadii = nullptr;
+    size_t count = 0;
+    DeviceCells cells;
+    field::FieldConstants constants;
+    double voxelSize = 0;
+    bool ran = false;
+    ClassCounts counts;
+    std::vector<uint32_t> isolated;
+    std::vector<std::pair<std::string, double>> stages;
+    std::unique_ptr<StageEvents> uploadEvents;
+
+    void collect(const StageEvents& events)
+    {
+        for (const auto& s : events.stages()) stages.push_back(s);
+    }
+};
+
+NarrowBandPipeline::NarrowBandPipeline(void* stream) : mImpl(new Impl)
+{
+    if (stream) {
+        mImpl->stream = static_cast<cudaStream_t>(stream);
+    } else {
+        FLUIDSURF_CUDA_CHECK(cudaStreamCreateWithFlags(&mImpl->stream, cudaStreamNonBlocking));
+        mImpl->ownStream = true;
+    }
+    // Keep freed device memory in the pool between stages and calls instead of handing it back
+    // to the driver at every synchronisation.
+    cudaMemPool_t pool;
+    int device = 0;
+    FLUIDSURF_CUDA_CHECK(cudaGetDevice(&device));
+    FLUIDSURF_CUDA_CHECK(cudaDeviceGetDefaultMemPool(&pool, device));
+    uint64_t threshold = ~uint64_t(0);
+    FLUIDSURF_CUDA_CHECK(cudaMemPoolSetAttribute(pool, cudaMemPoolAttrReleaseThreshold, &threshold));
+    mImpl->mem.reset(new DeviceMemory(mImpl->stream));
+}
+
+NarrowBandPipeline::~NarrowBandPipeline()
+{
+    mImpl->uploadEvents.reset();
+    mImpl->mem.reset();  // frees on the stream and waits
+    if (mImpl->ownStream) cudaStreamDestroy(mImpl->stream);
+}
+
+void NarrowBandPipeline::upload(const Vec3f* positions, const float* radii, size_t n, Vec3f& lo, Vec3f& hi)
+{
+    static_assert(sizeof(Vec3f) == sizeof(float3), "Vec3f must be three packed floats");
+    Impl& m = *mImpl;
+    StageEvents events(m.stream);
+    m.count = n;
+    m.inputPositions = m.mem->upload(reinterpret_cast<const float3*>(positions), n);
+    m.inputRadii = radii ? m.mem->upload(radii, n) : nullptr;
+    events.mark("upload");
+    float l[3], h[3];
+    particleBounds(m.inputPositions, n, l, h, *m.mem, m.stream);
+    events.mark("bounds");
+    lo = Vec3f(l[0], l[1], l[2]);
+    hi = Vec3f(h[0], h[1], h[2]);
+    m.collect(events);
+}
+
+LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
+{
+    Impl& m = *mImpl;
+    if (!m.inputPositions) throw Error("NarrowBandPipeline::run: upload() first");
+    StageEvents events(m.stream);
+    DeviceCells& cells = m.cells;
+    cells.cellSize = s.cellSize;
+    for (int a = 0; a < 3; ++a) cells.origin[a] = s.cellOrigin[a], cells.dims[a] = int(s.cellDims[a]);
+    sortIntoCells(cells, m.inputPositions, m.inputRadii, m.count, *m.mem, m.stream, events);
+    m.mem->release(m.inputPositions);
+    if (m.inputRadii) m.mem->release(m.inputRadii);
+    m.inputPositions = nullptr, m.inputRadii = nullptr;
+
+    ClassifySettings cs;
+    cs.h2 = s.h2;
+    cs.poly6 = s.poly6;
+    cs.gradientScale = s.gradientScale;
+    cs.smoothingLength = s.smoothingLength;
+    cs.uniformVolume = s.uniformVolume;
+    cs.splashNeighbours = s.splashNeighbours, cs.surfaceNeighbours = s.surfaceNeighbours;
+    cs.colorFieldThreshold = s.colorFieldThreshold, cs.colorGradientThreshold = s.colorGradientThreshold;
+    uint8_t* classes = m.mem->alloc<uint8_t>(m.count);
+    unsigned long long counts[4];
+    classifyParticles(cells, cs, classes, counts, *m.mem, m.stream);
+    m.counts.interior = counts[kInterior], m.counts.surface = counts[kSurface];
+    m.counts.splash = counts[kSplash], m.counts.isolated = counts[kIsolated];
+    events.mark("classify");
+
+    BandSettings bs;
+    bs.width = s.bandWidth;
+    bs.invDx = 1 / s.voxelSize;
+    bs.isolatedSeeds = s.keepIsolated;
+    const DeviceLeaves leaves = markBand(cells, classes, bs, *m.mem, m.stream);
+    events.mark("band");
+    // Isolated particles take no part in the field unless kept.
+    takeIsolated(cells, classes, m.counts.isolated, !s.keepIsolated, m.isolated, *m.mem, m.stream);
+    std::sort(m.isolated.begin(), m.isolated.end());
+    m.mem->release(classes);
+
+    m.voxelSize = s.voxelSize;
+    m.constants.influenceRadius = s.influenceRadius;
+    m.constants.radius = s.radius;
+    m.constants.perParticleRadii = cells.radii != nullptr;
+    m.constants.ssp07 = s.ssp07;
+    m.constants.tLow = s.tLow, m.constants.tHigh = s.tHigh;
+    m.constants.background = s.background;
+    float* values = m.mem->alloc<float>(leaves.count * 512);
+    events.mark("isolated");
+    gatherLeaves(cells, leaves.origins, leaves.masks, leaves.count, s.voxelSize, m.constants, values, m.stream);
+    events.mark("gather");
+
+    LeafBlocks out;
+    out.origins.resize(3 * leaves.count);
+    out.masks.resize(8 * leaves.count);
+    out.values.resize(512 * leaves.count);
+    if (leaves.count) {
+        FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.origins.data(), leaves.origins, out.origins.size() * sizeof(int32_t),
+                                             cudaMemcpyDeviceToHost, m.stream));
+        FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.masks.data(), leaves.masks, out.masks.size() * sizeof(uint64_t),
+                                             cudaMemcpyDeviceToHost, m.stream));
+        FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.values.data(), values, out.values.size() * sizeof(float),
+                                             cudaMemcpyDeviceToHost, m.stream));
+    }
+    events.mark("download");
+    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(m.stream));
+    m.mem->release(values);
+    m.mem->release(leaves.origins);
+    m.mem->release(leaves.masks);
+    m.collect(events);
+    m.ran = true;
+    return out;
+}
+
+const ClassCounts& NarrowBandPipeline::classCounts() const { return mImpl->counts; }
+const std::vector<uint32_t>& NarrowBandPipeline::isolatedParticles() const { return mImpl->isolated; }
+
+std::vector<float> NarrowBandPipeline::evaluate(const int32_t* origins, const uint64_t* masks, size_t leafCount)
+{
+    Impl& m = *mImpl;
+    if (!m.ran) throw Error("NarrowBandPipeline::evaluate: run() first");
+    std::vector<float> out(leafCount * 512, m.constants.background);
+    if (leafCount == 0) return out;
+    StageEvents events(m.stream);
+    const int32_t* o = m.mem->upload(origins, 3 * leafCount);
+    const unsigned long long* k = m.mem->upload(reinterpret_cast<const unsigned long long*>(masks), 8 * leafCount);
+    float* values = m.mem->alloc<float>(out.size());
+    gatherLeaves(m.cells, o, k, leafCount, m.voxelSize, m.constants, values, m.stream);
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float), cudaMemcpyDeviceToHost, m.stream));
+    events.mark("completion gather");
+    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(m.stream));
+    m.mem->release(o);
+    m.mem->release(k);
+    m.mem->release(values);
+    m.collect(events);
+    return out;
+}
+
+const std::vector<std::pair<std::string, double>>& NarrowBandPipeline::stageMs() const { return mImpl->stages; }
+size_t NarrowBandPipeline::peakBytes() const { return mImpl->mem->peakBytes(); }
+
+} // namespace cuda
+} // namespace fluidsurf
