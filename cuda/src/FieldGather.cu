@@ -29,6 +29,7 @@ struct Params
     double dx, R;
     field::FieldConstants constants;
     float* out;
+    const uint32_t* compactOffsets;  // non-null: out holds only the active voxels (see Stages.cuh)
 };
 
 /// Cell coordinate along an axis, clamped to [-1, dims] like the CPU's CellIndex::cellCoord.
@@ -161,7 +162,15 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
             s.m[0] = a.m0, s.m[1] = a.m1, s.m[2] = a.m2, s.m[3] = a.m3, s.m[4] = a.m4, s.m[5] = a.m5;
             value = field::fieldValue(s, p.constants);
         }
-        p.out[size_t(leaf) * 512 + voxel[k]] = value;
+        if (!p.compactOffsets) {
+            p.out[size_t(leaf) * 512 + voxel[k]] = value;
+        } else if (active[k]) {
+            // Rank of the voxel among the leaf's active voxels: the bits below it.
+            const int v = voxel[k], word = v >> 6;
+            uint32_t rank = __popcll(p.leafActive[8 * leaf + word] & ((1ull << (v & 63)) - 1));
+            for (int w = 0; w < word; ++w) rank += __popcll(p.leafActive[8 * leaf + w]);
+            p.out[p.compactOffsets[leaf] + rank] = value;
+        }
     }
 }
 
@@ -169,7 +178,7 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
 
 void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsigned long long* masks,
                   size_t leafCount, double voxelSize, const field::FieldConstants& constants, float* out,
-                  cudaStream_t stream)
+                  cudaStream_t stream, const uint32_t* compactOffsets)
 {
     if (leafCount == 0) return;
     Params p{};
@@ -185,6 +194,7 @@ void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsign
     p.dx = voxelSize, p.R = constants.influenceRadius;
     p.constants = constants;
     p.out = out;
+    p.compactOffsets = compactOffsets;
     gatherKernel<<<unsigned(leafCount), kThreads, 0, stream>>>(p);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
 }

@@ -115,7 +115,37 @@ __global__ void originKernel(const unsigned long long* __restrict__ keys, size_t
     origins[3 * i + 2] = 8 * (int(k & field) - kLeafBias);
 }
 
+__global__ void popcountKernel(const unsigned long long* __restrict__ masks, size_t count, uint32_t* __restrict__ out)
+{
+    const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i > count) return;
+    uint32_t n = 0;
+    if (i < count)
+        for (int w = 0; w < 8; ++w) n += __popcll(masks[8 * i + w]);
+    out[i] = n;
+}
+
 } // namespace
+
+uint32_t* activeOffsets(const unsigned long long* masks, size_t leafCount, size_t& total, DeviceMemory& mem,
+                        cudaStream_t stream)
+{
+    uint32_t* counts = mem.alloc<uint32_t>(leafCount + 1);
+    popcountKernel<<<blocksFor(leafCount + 1), kThreads, 0, stream>>>(masks, leafCount, counts);
+    FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+    uint32_t* offsets = mem.alloc<uint32_t>(leafCount + 1);
+    size_t tempBytes = 0;
+    FLUIDSURF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, tempBytes, counts, offsets, leafCount + 1, stream));
+    void* temp = mem.alloc<char>(tempBytes);
+    FLUIDSURF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, tempBytes, counts, offsets, leafCount + 1, stream));
+    mem.release(temp);
+    mem.release(counts);
+    uint32_t last = 0;
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(&last, offsets + leafCount, sizeof(uint32_t), cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    total = last;
+    return offsets;
+}
 
 DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const BandSettings& s, DeviceMemory& mem,
                       cudaStream_t stream)

@@ -121,15 +121,17 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     m.constants.ssp07 = s.ssp07;
     m.constants.tLow = s.tLow, m.constants.tHigh = s.tHigh;
     m.constants.background = s.background;
-    float* values = m.mem->alloc<float>(leaves.count * 512);
     events.mark("isolated");
-    gatherLeaves(cells, leaves.origins, leaves.masks, leaves.count, s.voxelSize, m.constants, values, m.stream);
+    size_t activeCount = 0;
+    uint32_t* offsets = activeOffsets(leaves.masks, leaves.count, activeCount, *m.mem, m.stream);
+    float* values = m.mem->alloc<float>(activeCount);
+    gatherLeaves(cells, leaves.origins, leaves.masks, leaves.count, s.voxelSize, m.constants, values, m.stream, offsets);
     events.mark("gather");
 
     LeafBlocks out;
     out.origins.resize(3 * leaves.count);
     out.masks.resize(8 * leaves.count);
-    out.values.resize(512 * leaves.count);
+    out.values.resize(activeCount);
     if (leaves.count) {
         FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.origins.data(), leaves.origins, out.origins.size() * sizeof(int32_t),
                                              cudaMemcpyDeviceToHost, m.stream));
@@ -141,6 +143,7 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     events.mark("download");
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(m.stream));
     m.mem->release(values);
+    m.mem->release(offsets);
     m.mem->release(leaves.origins);
     m.mem->release(leaves.masks);
     m.collect(events);

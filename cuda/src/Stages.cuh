@@ -71,10 +71,18 @@ DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const Ba
 
 // --- FieldGather.cu --------------------------------------------------------------------------
 
-/// phi for the 512 voxels of every leaf into out (leaf after leaf; inactive: background).
+/// phi for the 512 voxels of every leaf into out (leaf after leaf; inactive: background); or,
+/// with compactOffsets (per leaf, the number of active voxels in the leaves before it), only the
+/// active voxels, leaf after leaf in voxel order: a thin band fills ~15% of its leaves, so this
+/// is what goes back to the host.
 void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsigned long long* masks,
                   size_t leafCount, double voxelSize, const field::FieldConstants& constants, float* out,
-                  cudaStream_t stream);
+                  cudaStream_t stream, const uint32_t* compactOffsets = nullptr);
+
+/// Per leaf, the active voxels of the leaves before it (leafCount + 1 entries, the last is the
+/// total, which also comes back to the host; synchronises).
+uint32_t* activeOffsets(const unsigned long long* masks, size_t leafCount, size_t& total, DeviceMemory& mem,
+                        cudaStream_t stream);
 
 } // namespace cuda
 } // namespace fluidsurf

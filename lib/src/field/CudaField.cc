@@ -17,7 +17,6 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
-#include <cstring>
 #endif
 
 namespace fluidsurf {
@@ -57,14 +56,27 @@ size_t fillActiveVoxels(openvdb::FloatTree& tree, Compute&& compute)
 openvdb::FloatTree::Ptr treeFromBlocks(const cuda::LeafBlocks& blocks, float background)
 {
     const size_t n = blocks.size();
+    // Where each leaf's active values start in the compact array.
+    std::vector<size_t> offsets(n + 1, 0);
+    for (size_t i = 0; i < n; ++i) {
+        size_t count = 0;
+        for (int w = 0; w < 8; ++w) count += size_t(__builtin_popcountll(blocks.masks[8 * i + w]));
+        offsets[i + 1] = offsets[i] + count;
+    }
+    if (offsets[n] != blocks.values.size()) throw Error("CUDA pipeline: leaf blocks and values disagree");
     std::vector<LeafT*> built(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
             const openvdb::Coord origin(blocks.origins[3 * i], blocks.origins[3 * i + 1], blocks.origins[3 * i + 2]);
             auto* leaf = new LeafT(origin, background);
-            std::memcpy(leaf->buffer().data(), &blocks.values[512 * i], 512 * sizeof(float));
+            float* buffer = leaf->buffer().data();
             LeafT::NodeMaskType mask;
-            for (int w = 0; w < 8; ++w) mask.template getWord<uint64_t>(w) = blocks.masks[8 * i + w];
+            const float* value = &blocks.values[offsets[i]];
+            for (int w = 0; w < 8; ++w) {
+                const uint64_t word = blocks.masks[8 * i + w];
+                mask.template getWord<uint64_t>(w) = word;
+                for (uint64_t bits = word; bits; bits &= bits - 1) buffer[64 * w + __builtin_ctzll(bits)] = *value++;
+            }
             leaf->setValueMask(mask);
             built[i] = leaf;
         }

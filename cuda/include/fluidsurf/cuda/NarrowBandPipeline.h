@@ -46,7 +46,7 @@ struct LeafBlocks
 {
     std::vector<int32_t> origins;   ///< 3 per leaf
     std::vector<uint64_t> masks;    ///< 8 per leaf: word x, bit y * 8 + z
-    std::vector<float> values;      ///< 512 per leaf, OpenVDB's voxel order; inactive: background
+    std::vector<float> values;      ///< the active voxels only, leaf after leaf, in OpenVDB's voxel order
     size_t size() const { return origins.size() / 3; }
 };
 
