@@ -6,7 +6,7 @@
 // repeats the CPU's arithmetic step for step: coordinates relative to the first particle of the
 // cell, the same candidate cells (the box of the cell's particles widened by h, in z, y, x
 // order), the same 4 float lanes (candidate k adds to lane k % 4; candidates out of reach add
-// exact zeros there) and the same double reduction over the lanes.
+// exact zeros there) and the same reduction and rule (classify/ClassRule.h).
 #include "Stages.cuh"
 
 namespace fluidsurf {
@@ -92,21 +92,12 @@ __global__ void __launch_bounds__(kThreads) classifyKernel(DeviceCells c, Classi
                     count.rotate(), cf.rotate(), gx.rotate(), gy.rotate(), gz.rotate();
                 }
             }
-    double cnt = 0, sum = 0, g[3] = {0, 0, 0};
+    float lanes[5][4];
     for (int l = 0; l < 4; ++l) {
-        cnt += count.lane(l, m), sum += cf.lane(l, m);
-        g[0] += gx.lane(l, m), g[1] += gy.lane(l, m), g[2] += gz.lane(l, m);
+        lanes[0][l] = count.lane(l, m), lanes[1][l] = cf.lane(l, m);
+        lanes[2][l] = gx.lane(l, m), lanes[3][l] = gy.lane(l, m), lanes[4][l] = gz.lane(l, m);
     }
-    const float gradient = float(s.gradientScale * sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]));
-    const uint32_t neighbours = uint32_t(cnt) - 1;  // self is at distance 0
-    const float colorField = float(sum * s.poly6);
-    uint8_t cls = kInterior;
-    if (neighbours == 0) cls = kIsolated;
-    else if (int(neighbours) < s.splashNeighbours) cls = kSplash;
-    else if (int(neighbours) < s.surfaceNeighbours || colorField < s.colorFieldThreshold ||
-             gradient > s.colorGradientThreshold)
-        cls = kSurface;
-    classes[i] = cls;
+    classes[i] = classify::classifyLanes(lanes[0], lanes[1], lanes[2], lanes[3], lanes[4], s.rule).cls;
 }
 
 __global__ void countKernel(const uint8_t* __restrict__ classes, size_t n, unsigned long long* counts)
@@ -124,7 +115,7 @@ __global__ void isolatedKernel(DeviceCells c, const uint8_t* __restrict__ classe
                                unsigned int* cursor)
 {
     const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
-    if (i >= c.count || classes[i] != kIsolated) return;
+    if (i >= c.count || classes[i] != classify::Isolated) return;
     out[atomicAdd(cursor, 1u)] = c.order[i];
     // Far away: every kernel weight is then exactly zero, like leaving the particle out.
     if (drop) c.positions[i] = make_float3(3e30f, 3e30f, 3e30f);

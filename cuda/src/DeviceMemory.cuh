@@ -71,6 +71,18 @@ private:
     size_t mLive = 0, mPeak = 0;
 };
 
+/// Runs a CUB device algorithm the two-phase way: call(nullptr, bytes) sizes its scratch, then
+/// call(scratch, bytes) runs it; the scratch is freed once the queued work is done.
+template <typename Call>
+void runCub(DeviceMemory& mem, Call&& call)
+{
+    size_t bytes = 0;
+    FLUIDSURF_CUDA_CHECK(call(nullptr, bytes));
+    void* scratch = mem.alloc<char>(bytes);
+    FLUIDSURF_CUDA_CHECK(call(scratch, bytes));
+    mem.release(scratch);
+}
+
 /// Named points on a stream; stage i lasts from mark i-1 to mark i (CUDA events, so GPU time).
 class StageEvents
 {

@@ -23,7 +23,7 @@ unsigned blocksFor(size_t n) { return unsigned((n + kThreads - 1) / kThreads); }
 
 __device__ __forceinline__ bool isSeed(uint8_t cls, bool isolatedSeeds)
 {
-    return cls == kSurface || cls == kSplash || (isolatedSeeds && cls == kIsolated);
+    return cls == classify::Surface || cls == classify::Splash || (isolatedSeeds && cls == classify::Isolated);
 }
 
 /// The seed's voxel box, inclusive (NarrowBand.cc: within the width, up to 1e-6 voxel).
@@ -125,6 +125,22 @@ __global__ void popcountKernel(const unsigned long long* __restrict__ masks, siz
     out[i] = n;
 }
 
+/// Exclusive prefix sums of counts[0..n] (counts[n] must be 0) into a new array; the total (its
+/// last entry) comes back to the host. counts is freed.
+uint32_t* scanCounts(uint32_t* counts, size_t n, size_t& total, DeviceMemory& mem, cudaStream_t stream)
+{
+    uint32_t* offsets = mem.alloc<uint32_t>(n + 1);
+    runCub(mem, [&](void* scratch, size_t& bytes) {
+        return cub::DeviceScan::ExclusiveSum(scratch, bytes, counts, offsets, n + 1, stream);
+    });
+    mem.release(counts);
+    uint32_t last = 0;
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(&last, offsets + n, sizeof(uint32_t), cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    total = last;
+    return offsets;
+}
+
 } // namespace
 
 uint32_t* activeOffsets(const unsigned long long* masks, size_t leafCount, size_t& total, DeviceMemory& mem,
@@ -133,18 +149,7 @@ uint32_t* activeOffsets(const unsigned long long* masks, size_t leafCount, size_
     uint32_t* counts = mem.alloc<uint32_t>(leafCount + 1);
     popcountKernel<<<blocksFor(leafCount + 1), kThreads, 0, stream>>>(masks, leafCount, counts);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    uint32_t* offsets = mem.alloc<uint32_t>(leafCount + 1);
-    size_t tempBytes = 0;
-    FLUIDSURF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, tempBytes, counts, offsets, leafCount + 1, stream));
-    void* temp = mem.alloc<char>(tempBytes);
-    FLUIDSURF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, tempBytes, counts, offsets, leafCount + 1, stream));
-    mem.release(temp);
-    mem.release(counts);
-    uint32_t last = 0;
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(&last, offsets + leafCount, sizeof(uint32_t), cudaMemcpyDeviceToHost, stream));
-    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
-    total = last;
-    return offsets;
+    return scanCounts(counts, leafCount, total, mem, stream);
 }
 
 DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const BandSettings& s, DeviceMemory& mem,
@@ -158,16 +163,8 @@ DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const Ba
     FLUIDSURF_CUDA_CHECK(cudaMemsetAsync(counts + n, 0, sizeof(uint32_t), stream));
     countLeavesKernel<<<blocksFor(n), kThreads, 0, stream>>>(cells, classes, s, counts);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    uint32_t* offsets = mem.alloc<uint32_t>(n + 1);
-    size_t tempBytes = 0;
-    FLUIDSURF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, tempBytes, counts, offsets, n + 1, stream));
-    void* temp = mem.alloc<char>(tempBytes);
-    FLUIDSURF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, tempBytes, counts, offsets, n + 1, stream));
-    mem.release(temp);
-    mem.release(counts);
-    uint32_t pairs = 0;
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(&pairs, offsets + n, sizeof(uint32_t), cudaMemcpyDeviceToHost, stream));
-    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    size_t pairs = 0;
+    uint32_t* offsets = scanCounts(counts, n, pairs, mem, stream);
     if (pairs == 0) return out;
     unsigned long long* keys = mem.alloc<unsigned long long>(pairs);
     writeLeavesKernel<<<blocksFor(n), kThreads, 0, stream>>>(cells, classes, s, offsets, keys);
@@ -176,18 +173,14 @@ DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const Ba
 
     // Sorted unique leaf keys.
     unsigned long long* sorted = mem.alloc<unsigned long long>(pairs);
-    tempBytes = 0;
-    FLUIDSURF_CUDA_CHECK(cub::DeviceRadixSort::SortKeys(nullptr, tempBytes, keys, sorted, pairs, 0, 63, stream));
-    temp = mem.alloc<char>(tempBytes);
-    FLUIDSURF_CUDA_CHECK(cub::DeviceRadixSort::SortKeys(temp, tempBytes, keys, sorted, pairs, 0, 63, stream));
-    mem.release(temp);
+    runCub(mem, [&](void* scratch, size_t& bytes) {
+        return cub::DeviceRadixSort::SortKeys(scratch, bytes, keys, sorted, pairs, 0, 63, stream);
+    });
     unsigned long long* leafKeys = keys;  // reused
     size_t* unique = mem.alloc<size_t>(1);
-    tempBytes = 0;
-    FLUIDSURF_CUDA_CHECK(cub::DeviceSelect::Unique(nullptr, tempBytes, sorted, leafKeys, unique, pairs, stream));
-    temp = mem.alloc<char>(tempBytes);
-    FLUIDSURF_CUDA_CHECK(cub::DeviceSelect::Unique(temp, tempBytes, sorted, leafKeys, unique, pairs, stream));
-    mem.release(temp);
+    runCub(mem, [&](void* scratch, size_t& bytes) {
+        return cub::DeviceSelect::Unique(scratch, bytes, sorted, leafKeys, unique, pairs, stream);
+    });
     mem.release(sorted);
     size_t leafCount = 0;
     FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(&leafCount, unique, sizeof(size_t), cudaMemcpyDeviceToHost, stream));
@@ -202,6 +195,7 @@ DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const Ba
     out.origins = mem.alloc<int32_t>(3 * leafCount);
     originKernel<<<blocksFor(leafCount), kThreads, 0, stream>>>(leafKeys, leafCount, out.origins);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+    mem.release(leafKeys);
     return out;
 }
 

@@ -90,17 +90,17 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
 
     ClassifySettings cs;
     cs.h2 = s.h2;
-    cs.poly6 = s.poly6;
-    cs.gradientScale = s.gradientScale;
     cs.smoothingLength = s.smoothingLength;
     cs.uniformVolume = s.uniformVolume;
-    cs.splashNeighbours = s.splashNeighbours, cs.surfaceNeighbours = s.surfaceNeighbours;
-    cs.colorFieldThreshold = s.colorFieldThreshold, cs.colorGradientThreshold = s.colorGradientThreshold;
+    cs.rule.poly6 = s.poly6;
+    cs.rule.gradientScale = s.gradientScale;
+    cs.rule.splashNeighbours = s.splashNeighbours, cs.rule.surfaceNeighbours = s.surfaceNeighbours;
+    cs.rule.colorFieldThreshold = s.colorFieldThreshold, cs.rule.colorGradientThreshold = s.colorGradientThreshold;
     uint8_t* classes = m.mem->alloc<uint8_t>(m.count);
     unsigned long long counts[4];
     classifyParticles(cells, cs, classes, counts, *m.mem, m.stream);
-    m.counts.interior = counts[kInterior], m.counts.surface = counts[kSurface];
-    m.counts.splash = counts[kSplash], m.counts.isolated = counts[kIsolated];
+    m.counts.interior = counts[classify::Interior], m.counts.surface = counts[classify::Surface];
+    m.counts.splash = counts[classify::Splash], m.counts.isolated = counts[classify::Isolated];
     events.mark("classify");
 
     BandSettings bs;

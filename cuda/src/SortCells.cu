@@ -140,13 +140,9 @@ void sortIntoCells(DeviceCells& cells, const float3* positions, const float* rad
                                      bitsFor(uint32_t(cells.dims[2])), 1});
     unsigned long long* sortedKeys = mem.alloc<unsigned long long>(n);
     cells.order = mem.alloc<uint32_t>(n);
-    size_t tempBytes = 0;
-    FLUIDSURF_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, tempBytes, keys, sortedKeys, index, cells.order,
-                                                         n, 0, endBit, stream));
-    void* temp = mem.alloc<char>(tempBytes);
-    FLUIDSURF_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(temp, tempBytes, keys, sortedKeys, index, cells.order, n, 0,
-                                                         endBit, stream));
-    mem.release(temp);
+    runCub(mem, [&](void* scratch, size_t& bytes) {
+        return cub::DeviceRadixSort::SortPairs(scratch, bytes, keys, sortedKeys, index, cells.order, n, 0, endBit, stream);
+    });
     mem.release(index);
     cells.positions = mem.alloc<float3>(n);
     cells.radii = radii ? mem.alloc<float>(n) : nullptr;
@@ -158,23 +154,22 @@ void sortIntoCells(DeviceCells& cells, const float3* positions, const float* rad
     unsigned long long* cellKeys = keys;  // reused: at most n cells
     uint32_t* counts = mem.alloc<uint32_t>(n + 1);
     size_t* runs = mem.alloc<size_t>(1);
-    tempBytes = 0;
-    FLUIDSURF_CUDA_CHECK(cub::DeviceRunLengthEncode::Encode(nullptr, tempBytes, sortedKeys, cellKeys, counts, runs, n, stream));
-    temp = mem.alloc<char>(tempBytes);
-    FLUIDSURF_CUDA_CHECK(cub::DeviceRunLengthEncode::Encode(temp, tempBytes, sortedKeys, cellKeys, counts, runs, n, stream));
+    runCub(mem, [&](void* scratch, size_t& bytes) {
+        return cub::DeviceRunLengthEncode::Encode(scratch, bytes, sortedKeys, cellKeys, counts, runs, n, stream);
+    });
     size_t cellCount = 0;
     FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(&cellCount, runs, sizeof(size_t), cudaMemcpyDeviceToHost, stream));
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
-    mem.release(temp);
     mem.release(sortedKeys);
+    mem.release(runs);
     cells.cellCount = cellCount;
     cells.keys = cellKeys;
     FLUIDSURF_CUDA_CHECK(cudaMemsetAsync(counts + cellCount, 0, sizeof(uint32_t), stream));
     cells.starts = mem.alloc<uint32_t>(cellCount + 1);
-    tempBytes = 0;
-    FLUIDSURF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(nullptr, tempBytes, counts, cells.starts, cellCount + 1, stream));
-    temp = mem.alloc<char>(tempBytes);
-    FLUIDSURF_CUDA_CHECK(cub::DeviceScan::ExclusiveSum(temp, tempBytes, counts, cells.starts, cellCount + 1, stream));
+    runCub(mem, [&](void* scratch, size_t& bytes) {
+        return cub::DeviceScan::ExclusiveSum(scratch, bytes, counts, cells.starts, cellCount + 1, stream);
+    });
+    mem.release(counts);
     cells.cellOf = mem.alloc<uint32_t>(n);
     cellOfKernel<<<blocksFor(cellCount), kThreads, 0, stream>>>(cells.starts, cellCount, cells.cellOf);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());

@@ -4,6 +4,7 @@
 
 #include "DeviceCells.cuh"
 #include "DeviceMemory.cuh"
+#include "classify/ClassRule.h"
 #include "field/FieldMath.h"
 
 #include <cstdint>
@@ -25,17 +26,12 @@ void sortIntoCells(DeviceCells& cells, const float3* positions, const float* rad
 
 // --- Classify.cu (compiled without FMA contraction: bit-identical to the CPU) --------------
 
-enum ParticleClass : uint8_t { kInterior = 0, kSurface = 1, kSplash = 2, kIsolated = 3 };
-
 struct ClassifySettings
 {
-    float h2 = 0;                    ///< float(h * h)
-    double poly6 = 0;                ///< 315 / (64 pi h^9)
-    double gradientScale = 0;        ///< 6 * poly6 * h
-    double smoothingLength = 0;      ///< h
-    float uniformVolume = 0;         ///< float((2r)^3)
-    int splashNeighbours = 3, surfaceNeighbours = 0;
-    double colorFieldThreshold = 0, colorGradientThreshold = 0;
+    float h2 = 0;                ///< float(h * h)
+    double smoothingLength = 0;  ///< h
+    float uniformVolume = 0;     ///< float((2r)^3)
+    classify::ClassRule rule;
 };
 
 /// classes[i] for every particle (cell order); counts[4] per class come back to the host.

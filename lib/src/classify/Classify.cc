@@ -37,6 +37,16 @@ KernelConstants kernelConstants(const Params& params)
     return k;
 }
 
+ClassRule classRule(const Params& params)
+{
+    const KernelConstants k = kernelConstants(params);
+    ClassRule r;
+    r.poly6 = k.poly6, r.gradientScale = k.gradientScale;
+    r.splashNeighbours = params.splashNeighbours, r.surfaceNeighbours = params.surfaceNeighbours;
+    r.colorFieldThreshold = params.colorFieldThreshold, r.colorGradientThreshold = params.colorGradientThreshold;
+    return r;
+}
+
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params)
 {
     const size_t n = index.size();
@@ -46,7 +56,8 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     out.colorField.assign(n, 0.f);
     out.colorGradient.assign(n, 0.f);
     const KernelConstants k = kernelConstants(params);
-    const double h = k.h, poly6 = k.poly6, uniformVolume = k.uniformVolume;
+    const ClassRule rule = classRule(params);
+    const double h = k.h, uniformVolume = k.uniformVolume;
     const float h2 = k.h2;
 
     tbb::parallel_for(tbb::blocked_range<size_t>(0, index.cellCount(), 16), [&](const tbb::blocked_range<size_t>& cells) {
@@ -91,22 +102,11 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
                     cf += vt2 * t;
                     gx += vt2 * dx, gy += vt2 * dy, gz += vt2 * dz;
                 }
-                double cnt = 0, sum = 0, g[3] = {0, 0, 0};
-                for (int l = 0; l < kLanes; ++l) cnt += count[l], sum += cf[l], g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
-                // |grad cf| * h: dimensionless, 0 inside, 0.62 on a flat lattice face.
-                const float gradient = float(k.gradientScale * std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]));
-                const uint32_t neighbours = uint32_t(cnt) - 1;  // self is at distance 0
-                const float colorField = float(sum * poly6);
-                out.neighbours[i] = neighbours;
-                out.colorField[i] = colorField;
-                out.colorGradient[i] = gradient;
-                uint8_t cls = Interior;
-                if (neighbours == 0) cls = Isolated;
-                else if (int(neighbours) < params.splashNeighbours) cls = Splash;
-                else if (int(neighbours) < params.surfaceNeighbours || colorField < params.colorFieldThreshold ||
-                         gradient > params.colorGradientThreshold)
-                    cls = Surface;
-                out.classes[i] = cls;
+                const ParticleSums ps = classifyLanes(count, cf, gx, gy, gz, rule);
+                out.neighbours[i] = ps.neighbours;
+                out.colorField[i] = ps.colorField;
+                out.colorGradient[i] = ps.gradient;
+                out.classes[i] = ps.cls;
             }
         }
     });

@@ -17,6 +17,7 @@
 //   interior  everything else
 #pragma once
 
+#include "classify/ClassRule.h"
 #include "neighbors/CellIndex.h"
 
 #include <fluidsurf/Params.h>
@@ -26,8 +27,6 @@
 
 namespace fluidsurf {
 namespace classify {
-
-enum ParticleClass : uint8_t { Interior = 0, Surface = 1, Splash = 2, Isolated = 3 };
 
 inline bool isSurface(uint8_t c) { return c == Surface || c == Splash; }
 
@@ -51,6 +50,9 @@ struct KernelConstants
     double uniformVolume = 0;  ///< (2r)^3
 };
 KernelConstants kernelConstants(const Params& params);
+
+/// The class rule's constants and thresholds from the parameters.
+ClassRule classRule(const Params& params);
 
 /// Parallel over occupied cells; each cell gathers its neighbourhood once.
 /// uniformRadius is used when the index has no per-particle radii.
