@@ -27,7 +27,8 @@ __global__ void cellBoxKernel(DeviceCells c, double h, int* __restrict__ boxes)
     for (uint32_t i = b; i < e; ++i) {
         const float3 p = c.positions[i];
         const double v[3] = {p.x, p.y, p.z};
-        for (int a = 0; a < 3; ++a) lo[a] = fmin(lo[a], v[a]), hi[a] = fmax(hi[a], v[a]);
+        for (int a = 0; a < 3; ++a)
+            lo[a] = fmin(lo[a], v[a]), hi[a] = fmax(hi[a], v[a]);
     }
     for (int a = 0; a < 3; ++a) {
         boxes[6 * cell + a] = int(cellCoord(c, lo[a] - h, a));
@@ -51,8 +52,9 @@ struct Lane4
     }
 };
 
-__global__ void __launch_bounds__(kThreads) classifyKernel(DeviceCells c, ClassifySettings s,
-                                                           const int* __restrict__ boxes, uint8_t* __restrict__ classes)
+__global__ void __launch_bounds__(kThreads)
+    classifyKernel(DeviceCells c, ClassifySettings s, const int* __restrict__ boxes,
+                   uint8_t* __restrict__ classes)
 {
     const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i >= c.count) return;
@@ -62,9 +64,10 @@ __global__ void __launch_bounds__(kThreads) classifyKernel(DeviceCells c, Classi
     const float px = float(double(p.x) - double(o.x)), py = float(double(p.y) - double(o.y)),
                 pz = float(double(p.z) - double(o.z));
     int c0[3], c1[3];
-    for (int a = 0; a < 3; ++a) c0[a] = boxes[6 * cell + a], c1[a] = boxes[6 * cell + 3 + a];
+    for (int a = 0; a < 3; ++a)
+        c0[a] = boxes[6 * cell + a], c1[a] = boxes[6 * cell + 3 + a];
     Lane4 count, cf, gx, gy, gz;
-    unsigned m = 0;  // candidates so far
+    unsigned m = 0; // candidates so far
     for (int cz = c0[2]; cz <= c1[2]; ++cz)
         for (int cy = c0[1]; cy <= c1[1]; ++cy)
             for (int cx = c0[0]; cx <= c1[0]; ++cx) {
@@ -97,22 +100,26 @@ __global__ void __launch_bounds__(kThreads) classifyKernel(DeviceCells c, Classi
         lanes[0][l] = count.lane(l, m), lanes[1][l] = cf.lane(l, m);
         lanes[2][l] = gx.lane(l, m), lanes[3][l] = gy.lane(l, m), lanes[4][l] = gz.lane(l, m);
     }
-    classes[i] = classify::classifyLanes(lanes[0], lanes[1], lanes[2], lanes[3], lanes[4], s.rule).cls;
+    classes[i] =
+        classify::classifyLanes(lanes[0], lanes[1], lanes[2], lanes[3], lanes[4], s.rule).cls;
 }
 
-__global__ void countKernel(const uint8_t* __restrict__ classes, size_t n, unsigned long long* counts)
+__global__ void countKernel(const uint8_t* __restrict__ classes, size_t n,
+                            unsigned long long* counts)
 {
     __shared__ unsigned int local[4];
     if (threadIdx.x < 4) local[threadIdx.x] = 0;
     __syncthreads();
-    for (size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x; i < n; i += size_t(gridDim.x) * blockDim.x)
+    for (size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x; i < n;
+         i += size_t(gridDim.x) * blockDim.x)
         atomicAdd(&local[classes[i]], 1u);
     __syncthreads();
-    if (threadIdx.x < 4 && local[threadIdx.x]) atomicAdd(&counts[threadIdx.x], (unsigned long long)local[threadIdx.x]);
+    if (threadIdx.x < 4 && local[threadIdx.x])
+        atomicAdd(&counts[threadIdx.x], (unsigned long long)local[threadIdx.x]);
 }
 
-__global__ void isolatedKernel(DeviceCells c, const uint8_t* __restrict__ classes, bool drop, uint32_t* out,
-                               unsigned int* cursor)
+__global__ void isolatedKernel(DeviceCells c, const uint8_t* __restrict__ classes, bool drop,
+                               uint32_t* out, unsigned int* cursor)
 {
     const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i >= c.count || classes[i] != classify::Isolated) return;
@@ -126,19 +133,23 @@ __global__ void isolatedKernel(DeviceCells c, const uint8_t* __restrict__ classe
 void classifyParticles(const DeviceCells& cells, const ClassifySettings& s, uint8_t* classes,
                        unsigned long long counts[4], DeviceMemory& mem, cudaStream_t stream)
 {
-    for (int k = 0; k < 4; ++k) counts[k] = 0;
+    for (int k = 0; k < 4; ++k)
+        counts[k] = 0;
     if (cells.count == 0) return;
     int* boxes = mem.alloc<int>(6 * cells.cellCount);
-    cellBoxKernel<<<unsigned((cells.cellCount + 255) / 256), 256, 0, stream>>>(cells, s.smoothingLength, boxes);
+    cellBoxKernel<<<unsigned((cells.cellCount + 255) / 256), 256, 0, stream>>>(
+        cells, s.smoothingLength, boxes);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    classifyKernel<<<unsigned((cells.count + kThreads - 1) / kThreads), kThreads, 0, stream>>>(cells, s, boxes, classes);
+    classifyKernel<<<unsigned((cells.count + kThreads - 1) / kThreads), kThreads, 0, stream>>>(
+        cells, s, boxes, classes);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
     mem.release(boxes);
     unsigned long long* d = mem.alloc<unsigned long long>(4);
     FLUIDSURF_CUDA_CHECK(cudaMemsetAsync(d, 0, 4 * sizeof(unsigned long long), stream));
     countKernel<<<256, 256, 0, stream>>>(classes, cells.count, d);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(counts, d, 4 * sizeof(unsigned long long), cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(
+        cudaMemcpyAsync(counts, d, 4 * sizeof(unsigned long long), cudaMemcpyDeviceToHost, stream));
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
     mem.release(d);
 }
@@ -151,9 +162,11 @@ void takeIsolated(DeviceCells& cells, const uint8_t* classes, size_t isolatedCou
     uint32_t* out = mem.alloc<uint32_t>(isolatedCount);
     unsigned int* cursor = mem.alloc<unsigned int>(1);
     FLUIDSURF_CUDA_CHECK(cudaMemsetAsync(cursor, 0, sizeof(unsigned int), stream));
-    isolatedKernel<<<unsigned((cells.count + 255) / 256), 256, 0, stream>>>(cells, classes, drop, out, cursor);
+    isolatedKernel<<<unsigned((cells.count + 255) / 256), 256, 0, stream>>>(cells, classes, drop,
+                                                                            out, cursor);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(indices.data(), out, isolatedCount * sizeof(uint32_t), cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(indices.data(), out, isolatedCount * sizeof(uint32_t),
+                                         cudaMemcpyDeviceToHost, stream));
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
     mem.release(out);
     mem.release(cursor);

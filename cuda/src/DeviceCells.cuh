@@ -13,17 +13,17 @@ namespace cuda {
 
 struct DeviceCells
 {
-    size_t count = 0;                      ///< particles
-    size_t cellCount = 0;                  ///< occupied cells
-    float3* positions = nullptr;           ///< cell order
-    float* radii = nullptr;                ///< cell order, or null (uniform radius)
-    uint32_t* order = nullptr;             ///< cell order -> input index
-    uint32_t* cellOf = nullptr;            ///< particle -> its cell
-    unsigned long long* keys = nullptr;    ///< ascending Morton keys of the occupied cells
-    uint32_t* starts = nullptr;            ///< cellCount + 1 offsets
+    size_t count = 0;                   ///< particles
+    size_t cellCount = 0;               ///< occupied cells
+    float3* positions = nullptr;        ///< cell order
+    float* radii = nullptr;             ///< cell order, or null (uniform radius)
+    uint32_t* order = nullptr;          ///< cell order -> input index
+    uint32_t* cellOf = nullptr;         ///< particle -> its cell
+    unsigned long long* keys = nullptr; ///< ascending Morton keys of the occupied cells
+    uint32_t* starts = nullptr;         ///< cellCount + 1 offsets
     unsigned long long* tableKeys = nullptr;
     uint32_t* tableCells = nullptr;
-    unsigned long long tableMask = 0;      ///< table size - 1 (a power of two)
+    unsigned long long tableMask = 0; ///< table size - 1 (a power of two)
     double cellSize = 0, origin[3] = {0, 0, 0};
     int dims[3] = {0, 0, 0};
 };
@@ -31,7 +31,8 @@ struct DeviceCells
 constexpr unsigned long long kEmptyKey = ~0ull;
 
 /// The CPU's slot function (CellIndex.cc).
-__device__ __forceinline__ unsigned long long slotOf(unsigned long long key, unsigned long long mask)
+__device__ __forceinline__ unsigned long long slotOf(unsigned long long key,
+                                                     unsigned long long mask)
 {
     return ((key * 0x9e3779b97f4a7c15ull) >> 17) & mask;
 }
@@ -46,9 +47,11 @@ __device__ __forceinline__ long long cellCoord(const DeviceCells& c, double v, i
 }
 
 /// Index of cell (cx, cy, cz) among the occupied cells, or -1 (CellIndex::find).
-__device__ __forceinline__ long long findCell(const DeviceCells& c, long long cx, long long cy, long long cz)
+__device__ __forceinline__ long long findCell(const DeviceCells& c, long long cx, long long cy,
+                                              long long cz)
 {
-    if (cx < 0 || cy < 0 || cz < 0 || cx >= c.dims[0] || cy >= c.dims[1] || cz >= c.dims[2]) return -1;
+    if (cx < 0 || cy < 0 || cz < 0 || cx >= c.dims[0] || cy >= c.dims[1] || cz >= c.dims[2])
+        return -1;
     const unsigned long long key = mortonKey(cx, cy, cz);
     for (unsigned long long slot = slotOf(key, c.tableMask);; slot = (slot + 1) & c.tableMask) {
         const unsigned long long k = c.tableKeys[slot];

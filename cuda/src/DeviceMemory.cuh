@@ -21,12 +21,12 @@ public:
     DeviceMemory& operator=(const DeviceMemory&) = delete;
     ~DeviceMemory()
     {
-        for (const Block& b : mBlocks) cudaFreeAsync(b.ptr, mStream);
+        for (const Block& b : mBlocks)
+            cudaFreeAsync(b.ptr, mStream);
         cudaStreamSynchronize(mStream);
     }
 
-    template <typename T>
-    T* alloc(size_t count)
+    template <typename T> T* alloc(size_t count)
     {
         const size_t bytes = count ? count * sizeof(T) : 1;
         void* d = nullptr;
@@ -37,11 +37,12 @@ public:
         return static_cast<T*>(d);
     }
 
-    template <typename T>
-    T* upload(const T* host, size_t count)
+    template <typename T> T* upload(const T* host, size_t count)
     {
         T* d = alloc<T>(count);
-        if (count) FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(d, host, count * sizeof(T), cudaMemcpyHostToDevice, mStream));
+        if (count)
+            FLUIDSURF_CUDA_CHECK(
+                cudaMemcpyAsync(d, host, count * sizeof(T), cudaMemcpyHostToDevice, mStream));
         return d;
     }
 
@@ -73,8 +74,7 @@ private:
 
 /// Runs a CUB device algorithm the two-phase way: call(nullptr, bytes) sizes its scratch, then
 /// call(scratch, bytes) runs it; the scratch is freed once the queued work is done.
-template <typename Call>
-void runCub(DeviceMemory& mem, Call&& call)
+template <typename Call> void runCub(DeviceMemory& mem, Call&& call)
 {
     size_t bytes = 0;
     FLUIDSURF_CUDA_CHECK(call(nullptr, bytes));
@@ -92,7 +92,8 @@ public:
     StageEvents& operator=(const StageEvents&) = delete;
     ~StageEvents()
     {
-        for (auto& e : mEvents) cudaEventDestroy(e.second);
+        for (auto& e : mEvents)
+            cudaEventDestroy(e.second);
     }
     void mark(const char* name)
     {
@@ -108,7 +109,8 @@ public:
         FLUIDSURF_CUDA_CHECK(cudaEventSynchronize(mEvents.back().second));
         for (size_t i = 1; i < mEvents.size(); ++i) {
             float ms = 0;
-            FLUIDSURF_CUDA_CHECK(cudaEventElapsedTime(&ms, mEvents[i - 1].second, mEvents[i].second));
+            FLUIDSURF_CUDA_CHECK(
+                cudaEventElapsedTime(&ms, mEvents[i - 1].second, mEvents[i].second));
             out.emplace_back(mEvents[i].first, double(ms));
         }
         return out;

@@ -28,7 +28,8 @@ struct NarrowBandPipeline::Impl
 
     void collect(const StageEvents& events)
     {
-        for (const auto& s : events.stages()) stages.push_back(s);
+        for (const auto& s : events.stages())
+            stages.push_back(s);
     }
 };
 
@@ -47,18 +48,20 @@ NarrowBandPipeline::NarrowBandPipeline(void* stream) : mImpl(new Impl)
     FLUIDSURF_CUDA_CHECK(cudaGetDevice(&device));
     FLUIDSURF_CUDA_CHECK(cudaDeviceGetDefaultMemPool(&pool, device));
     uint64_t threshold = ~uint64_t(0);
-    FLUIDSURF_CUDA_CHECK(cudaMemPoolSetAttribute(pool, cudaMemPoolAttrReleaseThreshold, &threshold));
+    FLUIDSURF_CUDA_CHECK(
+        cudaMemPoolSetAttribute(pool, cudaMemPoolAttrReleaseThreshold, &threshold));
     mImpl->mem.reset(new DeviceMemory(mImpl->stream));
 }
 
 NarrowBandPipeline::~NarrowBandPipeline()
 {
     mImpl->uploadEvents.reset();
-    mImpl->mem.reset();  // frees on the stream and waits
+    mImpl->mem.reset(); // frees on the stream and waits
     if (mImpl->ownStream) cudaStreamDestroy(mImpl->stream);
 }
 
-void NarrowBandPipeline::upload(const Vec3f* positions, const float* radii, size_t n, Vec3f& lo, Vec3f& hi)
+void NarrowBandPipeline::upload(const Vec3f* positions, const float* radii, size_t n, Vec3f& lo,
+                                Vec3f& hi)
 {
     static_assert(sizeof(Vec3f) == sizeof(float3), "Vec3f must be three packed floats");
     Impl& m = *mImpl;
@@ -82,7 +85,8 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     StageEvents events(m.stream);
     DeviceCells& cells = m.cells;
     cells.cellSize = s.cellSize;
-    for (int a = 0; a < 3; ++a) cells.origin[a] = s.cellOrigin[a], cells.dims[a] = int(s.cellDims[a]);
+    for (int a = 0; a < 3; ++a)
+        cells.origin[a] = s.cellOrigin[a], cells.dims[a] = int(s.cellDims[a]);
     sortIntoCells(cells, m.inputPositions, m.inputRadii, m.count, *m.mem, m.stream, events);
     m.mem->release(m.inputPositions);
     if (m.inputRadii) m.mem->release(m.inputRadii);
@@ -95,7 +99,8 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     cs.rule.poly6 = s.poly6;
     cs.rule.gradientScale = s.gradientScale;
     cs.rule.splashNeighbours = s.splashNeighbours, cs.rule.surfaceNeighbours = s.surfaceNeighbours;
-    cs.rule.colorFieldThreshold = s.colorFieldThreshold, cs.rule.colorGradientThreshold = s.colorGradientThreshold;
+    cs.rule.colorFieldThreshold = s.colorFieldThreshold,
+    cs.rule.colorGradientThreshold = s.colorGradientThreshold;
     uint8_t* classes = m.mem->alloc<uint8_t>(m.count);
     unsigned long long counts[4];
     classifyParticles(cells, cs, classes, counts, *m.mem, m.stream);
@@ -125,7 +130,8 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     size_t activeCount = 0;
     uint32_t* offsets = activeOffsets(leaves.masks, leaves.count, activeCount, *m.mem, m.stream);
     float* values = m.mem->alloc<float>(activeCount);
-    gatherLeaves(cells, leaves.origins, leaves.masks, leaves.count, s.voxelSize, m.constants, values, m.stream, offsets);
+    gatherLeaves(cells, leaves.origins, leaves.masks, leaves.count, s.voxelSize, m.constants,
+                 values, m.stream, offsets);
     events.mark("gather");
 
     LeafBlocks out;
@@ -133,11 +139,14 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     out.masks.resize(8 * leaves.count);
     out.values.resize(activeCount);
     if (leaves.count) {
-        FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.origins.data(), leaves.origins, out.origins.size() * sizeof(int32_t),
+        FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.origins.data(), leaves.origins,
+                                             out.origins.size() * sizeof(int32_t),
                                              cudaMemcpyDeviceToHost, m.stream));
-        FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.masks.data(), leaves.masks, out.masks.size() * sizeof(uint64_t),
+        FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.masks.data(), leaves.masks,
+                                             out.masks.size() * sizeof(uint64_t),
                                              cudaMemcpyDeviceToHost, m.stream));
-        FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.values.data(), values, out.values.size() * sizeof(float),
+        FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.values.data(), values,
+                                             out.values.size() * sizeof(float),
                                              cudaMemcpyDeviceToHost, m.stream));
     }
     events.mark("download");
@@ -151,10 +160,17 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     return out;
 }
 
-const ClassCounts& NarrowBandPipeline::classCounts() const { return mImpl->counts; }
-const std::vector<uint32_t>& NarrowBandPipeline::isolatedParticles() const { return mImpl->isolated; }
+const ClassCounts& NarrowBandPipeline::classCounts() const
+{
+    return mImpl->counts;
+}
+const std::vector<uint32_t>& NarrowBandPipeline::isolatedParticles() const
+{
+    return mImpl->isolated;
+}
 
-std::vector<float> NarrowBandPipeline::evaluate(const int32_t* origins, const uint64_t* masks, size_t leafCount)
+std::vector<float> NarrowBandPipeline::evaluate(const int32_t* origins, const uint64_t* masks,
+                                                size_t leafCount)
 {
     Impl& m = *mImpl;
     if (!m.ran) throw Error("NarrowBandPipeline::evaluate: run() first");
@@ -162,10 +178,12 @@ std::vector<float> NarrowBandPipeline::evaluate(const int32_t* origins, const ui
     if (leafCount == 0) return out;
     StageEvents events(m.stream);
     const int32_t* o = m.mem->upload(origins, 3 * leafCount);
-    const unsigned long long* k = m.mem->upload(reinterpret_cast<const unsigned long long*>(masks), 8 * leafCount);
+    const unsigned long long* k =
+        m.mem->upload(reinterpret_cast<const unsigned long long*>(masks), 8 * leafCount);
     float* values = m.mem->alloc<float>(out.size());
     gatherLeaves(m.cells, o, k, leafCount, m.voxelSize, m.constants, values, m.stream);
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float), cudaMemcpyDeviceToHost, m.stream));
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float),
+                                         cudaMemcpyDeviceToHost, m.stream));
     events.mark("completion gather");
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(m.stream));
     m.mem->release(o);
@@ -175,8 +193,14 @@ std::vector<float> NarrowBandPipeline::evaluate(const int32_t* origins, const ui
     return out;
 }
 
-const std::vector<std::pair<std::string, double>>& NarrowBandPipeline::stageMs() const { return mImpl->stages; }
-size_t NarrowBandPipeline::peakBytes() const { return mImpl->mem->peakBytes(); }
+const std::vector<std::pair<std::string, double>>& NarrowBandPipeline::stageMs() const
+{
+    return mImpl->stages;
+}
+size_t NarrowBandPipeline::peakBytes() const
+{
+    return mImpl->mem->peakBytes();
+}
 
 } // namespace cuda
 } // namespace fluidsurf

@@ -21,16 +21,16 @@ void particleBounds(const float3* positions, size_t n, float lo[3], float hi[3],
 /// Sort the n uploaded particles (radii may be null) into the cell grid given by cells.cellSize,
 /// origin and dims (computed on the host with the CPU's arithmetic) and fill the rest of cells.
 /// Keys and order within a cell match the CPU exactly (stable sort of the input indices).
-void sortIntoCells(DeviceCells& cells, const float3* positions, const float* radii, size_t n, DeviceMemory& mem,
-                   cudaStream_t stream, StageEvents& events);
+void sortIntoCells(DeviceCells& cells, const float3* positions, const float* radii, size_t n,
+                   DeviceMemory& mem, cudaStream_t stream, StageEvents& events);
 
 // --- Classify.cu (compiled without FMA contraction: bit-identical to the CPU) --------------
 
 struct ClassifySettings
 {
-    float h2 = 0;                ///< float(h * h)
-    double smoothingLength = 0;  ///< h
-    float uniformVolume = 0;     ///< float((2r)^3)
+    float h2 = 0;               ///< float(h * h)
+    double smoothingLength = 0; ///< h
+    float uniformVolume = 0;    ///< float((2r)^3)
     classify::ClassRule rule;
 };
 
@@ -48,7 +48,7 @@ void takeIsolated(DeviceCells& cells, const uint8_t* classes, size_t isolatedCou
 struct BandSettings
 {
     double width = 0, invDx = 0;
-    bool isolatedSeeds = false;  ///< keepIsolated: isolated particles seed the band too
+    bool isolatedSeeds = false; ///< keepIsolated: isolated particles seed the band too
 };
 
 /// Leaf keys packed as 21 bits per axis, biased by 2^20 leaves.
@@ -57,13 +57,13 @@ constexpr int kLeafBias = 1 << 20;
 struct DeviceLeaves
 {
     size_t count = 0;
-    int32_t* origins = nullptr;             ///< 3 per leaf: voxel index of the corner
-    unsigned long long* masks = nullptr;    ///< 8 per leaf: word x, bit y * 8 + z
+    int32_t* origins = nullptr;          ///< 3 per leaf: voxel index of the corner
+    unsigned long long* masks = nullptr; ///< 8 per leaf: word x, bit y * 8 + z
 };
 
 /// The leaves and active voxels of the band: every voxel within +-width (per axis) of a seed.
-DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const BandSettings& s, DeviceMemory& mem,
-                      cudaStream_t stream);
+DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const BandSettings& s,
+                      DeviceMemory& mem, cudaStream_t stream);
 
 // --- FieldGather.cu --------------------------------------------------------------------------
 
@@ -72,13 +72,13 @@ DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const Ba
 /// active voxels, leaf after leaf in voxel order: a thin band fills ~15% of its leaves, so this
 /// is what goes back to the host.
 void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsigned long long* masks,
-                  size_t leafCount, double voxelSize, const field::FieldConstants& constants, float* out,
-                  cudaStream_t stream, const uint32_t* compactOffsets = nullptr);
+                  size_t leafCount, double voxelSize, const field::FieldConstants& constants,
+                  float* out, cudaStream_t stream, const uint32_t* compactOffsets = nullptr);
 
 /// Per leaf, the active voxels of the leaves before it (leafCount + 1 entries, the last is the
 /// total, which also comes back to the host; synchronises).
-uint32_t* activeOffsets(const unsigned long long* masks, size_t leafCount, size_t& total, DeviceMemory& mem,
-                        cudaStream_t stream);
+uint32_t* activeOffsets(const unsigned long long* masks, size_t leafCount, size_t& total,
+                        DeviceMemory& mem, cudaStream_t stream);
 
 } // namespace cuda
 } // namespace fluidsurf

@@ -156,6 +156,7 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
         if (params.device == Device::Cuda && !gpu.usable)
             throw Error("CUDA was requested but there is no usable GPU: " + gpu.reason);
         onGpu = gpu.usable;
+        if (onGpu) clock.done("cuda context");  // waiting for it, unless prepareDevice made it earlier
     }
     // The narrow band runs on the device from the sort on; gather-full only gathers there.
     openvdb::FloatTree::Ptr tree;

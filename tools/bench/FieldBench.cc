@@ -139,7 +139,7 @@ Row runOurs(const Case& c, const Params& p, int threads, int repeat, const std::
 void printRow(const Row& r, double reference)
 {
     std::string stages;
-    for (const char* s : {"neighbors", "classify", "narrow band", "bounding volume", "field", "upload", "device field",
+    for (const char* s : {"neighbors", "classify", "narrow band", "bounding volume", "field", "cuda context", "upload", "device field",
                           "vdb build", "complete band", "level set"}) {
         auto it = r.stages.find(s);
         if (it == r.stages.end()) continue;
@@ -159,7 +159,7 @@ int runFieldBench(const FieldBenchOptions& o)
     const int hw = int(tbb::info::default_concurrency());
     std::printf("fluidsurf_bench field: %d hardware threads; seconds are medians of %d runs; stages: %s\n\n", hw, o.repeat,
                 "CPU: neighbors / classify / narrow band (or bounding volume) / field / complete band / level set; "
-                "CUDA: upload / device field / vdb build / complete band / level set");
+                "CUDA: cuda context / upload / device field / vdb build / complete band / level set");
     std::printf("| scene | particles | voxel | R | method | threads | field stage s | stages s | evaluations | M evals/s "
                 "| active voxels | peak RSS MiB | time / narrow band |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     const std::vector<std::string> methods = split(o.methods);

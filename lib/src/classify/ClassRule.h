@@ -4,7 +4,7 @@
 // the rounding here changes the band's topology.
 #pragma once
 
-#include "field/FieldMath.h"  // FLUIDSURF_HD
+#include "field/FieldMath.h" // FLUIDSURF_HD
 
 #include <stdint.h>
 
@@ -15,36 +15,39 @@ enum ParticleClass : uint8_t { Interior = 0, Surface = 1, Splash = 2, Isolated =
 
 struct ClassRule
 {
-    double poly6 = 0, gradientScale = 0;  ///< see KernelConstants
+    double poly6 = 0, gradientScale = 0; ///< see KernelConstants
     int splashNeighbours = 3, surfaceNeighbours = 25;
     double colorFieldThreshold = 0.9, colorGradientThreshold = 0.45;
 };
 
 struct ParticleSums
 {
-    uint32_t neighbours = 0;  ///< other particles closer than h
-    float colorField = 0;     ///< cf_i
-    float gradient = 0;       ///< |grad cf_i| * h
+    uint32_t neighbours = 0; ///< other particles closer than h
+    float colorField = 0;    ///< cf_i
+    float gradient = 0;      ///< |grad cf_i| * h
     uint8_t cls = Interior;
 };
 
 /// From per-lane sums (count, V t^3, V t^2 d per axis; lane l = candidates k with k % 4 == l,
 /// self included) to the particle's sums and class. L: anything indexable by 0..3.
 template <typename L>
-FLUIDSURF_HD inline ParticleSums classifyLanes(const L& count, const L& cf, const L& gx, const L& gy, const L& gz,
-                                               const ClassRule& rule)
+FLUIDSURF_HD inline ParticleSums classifyLanes(const L& count, const L& cf, const L& gx,
+                                               const L& gy, const L& gz, const ClassRule& rule)
 {
     double cnt = 0, sum = 0, g[3] = {0, 0, 0};
-    for (int l = 0; l < 4; ++l) cnt += count[l], sum += cf[l], g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
+    for (int l = 0; l < 4; ++l)
+        cnt += count[l], sum += cf[l], g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
     ParticleSums s;
     // |grad cf| * h: dimensionless, 0 inside, 0.62 on a flat lattice face.
     s.gradient = float(rule.gradientScale * sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]));
-    s.neighbours = uint32_t(cnt) - 1;  // self is at distance 0
+    s.neighbours = uint32_t(cnt) - 1; // self is at distance 0
     s.colorField = float(sum * rule.poly6);
-    if (s.neighbours == 0) s.cls = Isolated;
-    else if (int(s.neighbours) < rule.splashNeighbours) s.cls = Splash;
-    else if (int(s.neighbours) < rule.surfaceNeighbours || s.colorField < rule.colorFieldThreshold ||
-             s.gradient > rule.colorGradientThreshold)
+    if (s.neighbours == 0)
+        s.cls = Isolated;
+    else if (int(s.neighbours) < rule.splashNeighbours)
+        s.cls = Splash;
+    else if (int(s.neighbours) < rule.surfaceNeighbours ||
+             s.colorField < rule.colorFieldThreshold || s.gradient > rule.colorGradientThreshold)
         s.cls = Surface;
     return s;
 }

@@ -26,8 +26,8 @@ bool cudaUsable(std::string* reason = nullptr, std::string* deviceName = nullptr
 
 /// Like evaluateField, on the GPU; GPU timings and memory go into stats. Error when the build has
 /// no CUDA backend or there is no usable GPU.
-size_t evaluateFieldCuda(openvdb::FloatTree& tree, const neighbors::CellIndex& particles, const Params& params,
-                         RasterizeStats& stats);
+size_t evaluateFieldCuda(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
+                         const Params& params, RasterizeStats& stats);
 
 /// The completed narrow band of the particles (radii: per particle, or empty), computed on the
 /// GPU: the same active voxels as the CPU path, values within ~1e-5 r. Fills stats (classes,
@@ -36,9 +36,10 @@ size_t evaluateFieldCuda(openvdb::FloatTree& tree, const neighbors::CellIndex& p
 /// nothing to stats, when the frame does not fit the device's leaf keys (more than 2^20 leaves
 /// from the origin along an axis); the caller then takes the CPU stages.
 using StageDone = std::function<void(const char*)>;
-openvdb::FloatTree::Ptr rasterizeNarrowBandCuda(const std::vector<Vec3f>& positions, const std::vector<float>& radii,
-                                                const Params& params, double bandWidth, RasterizeStats& stats,
-                                                std::vector<uint32_t>& isolated, const StageDone& stageDone);
+openvdb::FloatTree::Ptr
+rasterizeNarrowBandCuda(const std::vector<Vec3f>& positions, const std::vector<float>& radii,
+                        const Params& params, double bandWidth, RasterizeStats& stats,
+                        std::vector<uint32_t>& isolated, const StageDone& stageDone);
 
 } // namespace field
 } // namespace fluidsurf

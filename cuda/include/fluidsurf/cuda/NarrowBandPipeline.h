@@ -44,9 +44,10 @@ struct PipelineSettings
 
 struct LeafBlocks
 {
-    std::vector<int32_t> origins;   ///< 3 per leaf
-    std::vector<uint64_t> masks;    ///< 8 per leaf: word x, bit y * 8 + z
-    std::vector<float> values;      ///< the active voxels only, leaf after leaf, in OpenVDB's voxel order
+    std::vector<int32_t> origins; ///< 3 per leaf
+    std::vector<uint64_t> masks;  ///< 8 per leaf: word x, bit y * 8 + z
+    std::vector<float>
+        values; ///< the active voxels only, leaf after leaf, in OpenVDB's voxel order
     size_t size() const { return origins.size() / 3; }
 };
 
