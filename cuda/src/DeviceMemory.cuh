@@ -11,6 +11,33 @@
 namespace fluidsurf {
 namespace cuda {
 
+/// The caller's stream, or a non-blocking stream of our own (never the legacy default stream,
+/// which would serialise with every other user of the device).
+class Stream
+{
+public:
+    explicit Stream(void* given)
+    {
+        if (given) {
+            mStream = static_cast<cudaStream_t>(given);
+        } else {
+            FLUIDSURF_CUDA_CHECK(cudaStreamCreateWithFlags(&mStream, cudaStreamNonBlocking));
+            mOwned = true;
+        }
+    }
+    Stream(const Stream&) = delete;
+    Stream& operator=(const Stream&) = delete;
+    ~Stream()
+    {
+        if (mOwned) cudaStreamDestroy(mStream);
+    }
+    cudaStream_t get() const { return mStream; }
+
+private:
+    cudaStream_t mStream = nullptr;
+    bool mOwned = false;
+};
+
 /// Stream-ordered (cudaMallocAsync / cudaFreeAsync): freeing a buffer while queued work still
 /// reads it is safe, and nothing synchronises the device.
 class DeviceMemory

@@ -204,7 +204,8 @@ std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* 
     std::vector<float> out(in.leafCount * 512, in.background);
     if (in.leafCount == 0) return out;
     if (!(in.cellSize > 0 && in.voxelSize > 0 && in.influenceRadius > 0)) throw Error("gatherField: invalid sizes");
-    cudaStream_t stream = static_cast<cudaStream_t>(streamPtr);
+    const Stream ownStream(streamPtr);
+    const cudaStream_t stream = ownStream.get();
     DeviceMemory mem(stream);
     StageEvents events(stream);
     static_assert(sizeof(Vec3f) == sizeof(float3), "Vec3f must be three packed floats");

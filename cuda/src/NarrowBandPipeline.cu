@@ -11,8 +11,8 @@ namespace cuda {
 
 struct NarrowBandPipeline::Impl
 {
+    std::unique_ptr<Stream> ownStream;
     cudaStream_t stream = nullptr;
-    bool ownStream = false;
     std::unique_ptr<DeviceMemory> mem;
     const float3* inputPositions = nullptr;
     const float* inputRadii = nullptr;
@@ -24,7 +24,6 @@ struct NarrowBandPipeline::Impl
     ClassCounts counts;
     std::vector<uint32_t> isolated;
     std::vector<std::pair<std::string, double>> stages;
-    std::unique_ptr<StageEvents> uploadEvents;
 
     void collect(const StageEvents& events)
     {
@@ -35,14 +34,10 @@ struct NarrowBandPipeline::Impl
 
 NarrowBandPipeline::NarrowBandPipeline(void* stream) : mImpl(new Impl)
 {
-    if (stream) {
-        mImpl->stream = static_cast<cudaStream_t>(stream);
-    } else {
-        FLUIDSURF_CUDA_CHECK(cudaStreamCreateWithFlags(&mImpl->stream, cudaStreamNonBlocking));
-        mImpl->ownStream = true;
-    }
-    // Keep freed device memory in the pool between stages and calls instead of handing it back
-    // to the driver at every synchronisation.
+    mImpl->ownStream.reset(new Stream(stream));
+    mImpl->stream = mImpl->ownStream->get();
+    // Keep freed device memory in the pool between stages instead of handing it back to the
+    // driver at every synchronisation (the destructor trims it).
     cudaMemPool_t pool;
     int device = 0;
     FLUIDSURF_CUDA_CHECK(cudaGetDevice(&device));
@@ -55,9 +50,14 @@ NarrowBandPipeline::NarrowBandPipeline(void* stream) : mImpl(new Impl)
 
 NarrowBandPipeline::~NarrowBandPipeline()
 {
-    mImpl->uploadEvents.reset();
     mImpl->mem.reset(); // frees on the stream and waits
-    if (mImpl->ownStream) cudaStreamDestroy(mImpl->stream);
+    mImpl->ownStream.reset();
+    // Hand the pool's memory back: a tool that links the library keeps its GPU memory.
+    cudaMemPool_t pool;
+    int device = 0;
+    if (cudaGetDevice(&device) == cudaSuccess &&
+        cudaDeviceGetDefaultMemPool(&pool, device) == cudaSuccess)
+        cudaMemPoolTrimTo(pool, 0);
 }
 
 void NarrowBandPipeline::upload(const Vec3f* positions, const float* radii, size_t n, Vec3f& lo,

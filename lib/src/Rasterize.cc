@@ -160,9 +160,28 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
     }
     // The narrow band runs on the device from the sort on; gather-full only gathers there.
     openvdb::FloatTree::Ptr tree;
-    if (onGpu && params.method == FieldMethod::NarrowBand && ps.size() > 0)
-        tree = field::rasterizeNarrowBandCuda(ps.positions, radii, params, stats.bandWidth, stats,
-                                              result.isolatedParticles, [&](const char* name) { clock.done(name); });
+    if (onGpu && params.method == FieldMethod::NarrowBand && ps.size() > 0) {
+        try {
+            tree = field::rasterizeNarrowBandCuda(ps.positions, radii, params, stats.bandWidth, stats,
+                                                  result.isolatedParticles,
+                                                  [&](const char* name) { clock.done(name); });
+        } catch (const ValueError&) {
+            throw;  // the input's fault: the CPU would say the same
+        } catch (const Error& e) {
+            // CUDA failed (out of device memory, ...): auto means "the GPU if it can", so the CPU
+            // takes over and says why; an explicit cuda request reports the failure.
+            if (params.device == Device::Cuda) throw;
+            const std::string why = e.what();
+            const RasterizeStats before = stats;
+            stats = RasterizeStats();
+            stats.particles = before.particles, stats.bandWidth = before.bandWidth;
+            stats.stages = before.stages;
+            stats.device = "cpu (CUDA failed: " + why + ")";
+            result.isolatedParticles.clear();
+            tree = nullptr;
+            onGpu = false;
+        }
+    }
     if (!tree) tree = cpuStages(ps, radii, params, onGpu, result, clock);
 
     levelset::GridInfo info;
