@@ -5,7 +5,7 @@
 // CUDA request must fail with a clear error.
 #include "TestData.h"
 
-#include "field/CudaField.h"
+#include "unit/field/RequireGpu.h"
 
 #include <fluidsurf/Rasterize.h>
 #include <fluidsurf/Scenes.h>
@@ -16,12 +16,6 @@
 
 namespace fluidsurf {
 namespace {
-
-#define FLUIDSURF_REQUIRE_GPU()                                                                    \
-    do {                                                                                           \
-        std::string why;                                                                           \
-        if (!field::cudaUsable(&why)) GTEST_SKIP() << "no usable GPU: " << why;                    \
-    } while (0)
 
 /// CPU and CUDA grids of the same particles and parameters agree.
 void expectSameField(const ParticleSet& ps, Params p, const std::string& what, bool devicePipeline = true)

@@ -1,8 +1,9 @@
 // The narrow-band field against the independent brute-force reference (BruteForce.h): real
 // frames, a single particle (phi = |x - p| - r exactly), a lattice slab (a plane), and no
-// particle centre outside the surface.
+// particle centre outside the surface. The *Cuda tests run the same checks on the GPU pipeline.
 #include "TestData.h"
 #include "unit/field/BruteForce.h"
+#include "unit/field/RequireGpu.h"
 
 #include <fluidsurf/Rasterize.h>
 #include <fluidsurf/Scenes.h>
@@ -118,17 +119,30 @@ void expectParticlesInside(const openvdb::FloatGrid& grid, const ParticleSet& ps
 
 } // namespace
 
-TEST(FieldReference, RealFramesMatchBruteForce)
+static void realFramesMatchBruteForce(Device device)
 {
-    FLUIDSURF_REQUIRE_SHARED_DATA();
     for (const test::RealFrame& f : kRealFrames) {
         const ParticleSet ps = io::readParticles(sharedData() + "/real/" + f.name);
-        const Params p = Params::fromRadius(f.radius);
+        Params p = Params::fromRadius(f.radius);
+        p.device = device;
         const RasterizeResult res = rasterizeParticles(ps, p, f.name);
         expectMatchesReference(*res.grid, Reference(ps, p), p, f.name);
         // Only the 20 x 20 grid at 15 r spacing is all isolated (no grid at all).
         EXPECT_EQ(res.grid->activeVoxelCount() == 0, res.stats.isolated == ps.size()) << f.name;
     }
+}
+
+TEST(FieldReference, RealFramesMatchBruteForce)
+{
+    FLUIDSURF_REQUIRE_SHARED_DATA();
+    realFramesMatchBruteForce(Device::Cpu);
+}
+
+TEST(FieldReferenceCuda, RealFramesMatchBruteForce)
+{
+    FLUIDSURF_REQUIRE_GPU();
+    FLUIDSURF_REQUIRE_SHARED_DATA();
+    realFramesMatchBruteForce(Device::Cuda);
 }
 
 // SSP07 shrinks the surface (f < 1) where the neighbour centroid moves fast, and the centroid
@@ -172,7 +186,7 @@ TEST(FieldReference, Zb05MatchesBruteForce)
     expectMatchesReference(*res.grid, Reference(ps, p), p, "zb05");
 }
 
-TEST(FieldReference, OtherVoxelSizesAndSupports)
+static void otherVoxelSizesAndSupports(Device device)
 {
     SceneParams sp;
     sp.count = 3000;
@@ -183,6 +197,7 @@ TEST(FieldReference, OtherVoxelSizesAndSupports)
             Params p = Params::fromRadius(sp.radius);
             p.voxelSize = voxel * sp.radius;
             p.influenceRadius = support * sp.radius;
+            p.device = device;
             const RasterizeResult res = rasterizeParticles(ps, p);
             const std::string what = "voxel " + std::to_string(voxel) + "r R " + std::to_string(support) + "r";
             expectMatchesReference(*res.grid, Reference(ps, p), p, what, 20000);
@@ -192,7 +207,15 @@ TEST(FieldReference, OtherVoxelSizesAndSupports)
         }
 }
 
-TEST(FieldReference, SingleParticleIsASphereOfRadiusR)
+TEST(FieldReference, OtherVoxelSizesAndSupports) { otherVoxelSizesAndSupports(Device::Cpu); }
+
+TEST(FieldReferenceCuda, OtherVoxelSizesAndSupports)
+{
+    FLUIDSURF_REQUIRE_GPU();
+    otherVoxelSizesAndSupports(Device::Cuda);
+}
+
+static void singleParticleIsASphere(Device device)
 {
     SceneParams sp;
     sp.radius = 0.1;
@@ -200,6 +223,7 @@ TEST(FieldReference, SingleParticleIsASphereOfRadiusR)
     ps.positions[0] = Vec3f(0.0137f, -0.271f, 1.5f);  // off the grid
     Params p = Params::fromRadius(sp.radius);
     p.keepIsolated = true;
+    p.device = device;
     const RasterizeResult res = rasterizeParticles(ps, p);
     EXPECT_GE(res.grid->activeVoxelCount(), 64u);  // +-2r around it at voxel r
     const Vec3f c = ps.positions[0];
@@ -217,6 +241,14 @@ TEST(FieldReference, SingleParticleIsASphereOfRadiusR)
     const RasterizeResult left = rasterizeParticles(ps, p);
     EXPECT_EQ(left.grid->activeVoxelCount(), 0u);
     ASSERT_EQ(left.isolatedParticles.size(), 1u);
+}
+
+TEST(FieldReference, SingleParticleIsASphereOfRadiusR) { singleParticleIsASphere(Device::Cpu); }
+
+TEST(FieldReferenceCuda, SingleParticleIsASphereOfRadiusR)
+{
+    FLUIDSURF_REQUIRE_GPU();
+    singleParticleIsASphere(Device::Cuda);
 }
 
 TEST(FieldReference, LatticeSlabIsAPlane)

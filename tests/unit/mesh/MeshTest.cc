@@ -4,6 +4,7 @@
 #include "TestData.h"
 #include "../field/BruteForce.h"
 #include "MeshDistance.h"
+#include "../field/RequireGpu.h"
 
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/MeshLevelSet.h>
@@ -183,17 +184,31 @@ TEST(MarchingCubes, LatticeBallMatchesTheField)
 // primal (ours) and a dual (OpenVDB) mesher, up to 48% in volume on fluid_250's tiny blobs; and
 // where a cell holds two sheets, OpenVDB's dual vertex sits between them, up to 0.69 voxel from
 // the zero crossings our vertices lie on. The bounds below are what the fluid frames meet.
-TEST(MarchingCubes, RealFramesAreWatertight)
+static void realFramesAreWatertight(Device device)
 {
-    FLUIDSURF_REQUIRE_SHARED_DATA();
     for (const test::RealFrame& f : test::kRealFrames) {
         const ParticleSet ps = io::readParticles(test::sharedData() + "/real/" + f.name);
-        const RasterizeResult res = rasterizeParticles(ps, Params::fromRadius(f.radius), f.name);
+        Params p = Params::fromRadius(f.radius);
+        p.device = device;
+        const RasterizeResult res = rasterizeParticles(ps, p, f.name);
         Agreement bound;
         bound.area = 0.02, bound.toOpenVdb = 0.75, bound.fromOpenVdb = 0.6;
         if (!f.fluid || ps.size() < 1000) bound.volume = bound.area = 1.0;  // scattered points, tiny blobs
         checkBothMeshers(*res.grid, f.name, bound);
     }
+}
+
+TEST(MarchingCubes, RealFramesAreWatertight)
+{
+    FLUIDSURF_REQUIRE_SHARED_DATA();
+    realFramesAreWatertight(Device::Cpu);
+}
+
+TEST(MarchingCubesCuda, RealFramesAreWatertight)
+{
+    FLUIDSURF_REQUIRE_GPU();
+    FLUIDSURF_REQUIRE_SHARED_DATA();
+    realFramesAreWatertight(Device::Cuda);
 }
 
 TEST(MarchingCubes, GeneratedScenesAreWatertight)
