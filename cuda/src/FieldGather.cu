@@ -17,13 +17,7 @@ constexpr int kCellChunk = 512;       // occupied-cell lookups per pass
 
 struct Params
 {
-    const float3* positions;
-    const float* radii;
-    const unsigned long long* keys;
-    const uint32_t* starts;
-    unsigned long long cellCount;
-    double cellSize, cellOrigin[3];
-    int cellDims[3];
+    DeviceCells cells;
     const int32_t* leafOrigins;
     const unsigned long long* leafActive;
     double dx, R;
@@ -31,25 +25,6 @@ struct Params
     float* out;
     const uint32_t* compactOffsets;  // non-null: out holds only the active voxels (see Stages.cuh)
 };
-
-/// Cell coordinate along an axis, clamped to [-1, dims] like the CPU's CellIndex::cellCoord.
-__device__ __forceinline__ long long boxCellCoord(const Params& p, double v, int axis)
-{
-    const double c = floor((v - p.cellOrigin[axis]) / p.cellSize);
-    return (long long)fmin(fmax(c, -1.0), double(p.cellDims[axis]));
-}
-
-/// Position of key among the sorted occupied keys, or -1.
-__device__ long long searchCell(const Params& p, unsigned long long key)
-{
-    unsigned long long lo = 0, hi = p.cellCount;
-    while (lo < hi) {
-        const unsigned long long mid = (lo + hi) / 2;
-        if (p.keys[mid] < key) lo = mid + 1;
-        else hi = mid;
-    }
-    return lo < p.cellCount && p.keys[lo] == key ? (long long)lo : -1;
-}
 
 struct Sums
 {
@@ -81,8 +56,8 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
     // The occupied cells overlapping the leaf's voxel box widened by R.
     long long c0[3], c1[3];
     for (int a = 0; a < 3; ++a) {
-        c0[a] = boxCellCoord(p, o[a] - p.R, a);
-        c1[a] = boxCellCoord(p, o[a] + 7 * p.dx + p.R, a);
+        c0[a] = cellCoord(p.cells, o[a] - p.R, a);
+        c1[a] = cellCoord(p.cells, o[a] + 7 * p.dx + p.R, a);
     }
     const long long nx = c1[0] - c0[0] + 1, ny = c1[1] - c0[1] + 1, nz = c1[2] - c0[2] + 1;
     const long long boxCells = nx * ny * nz;
@@ -93,12 +68,11 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
         // order does not matter for correctness, only for the last bits of the sums).
         for (long long c = chunk + threadIdx.x; c < chunk + kCellChunk && c < boxCells; c += kThreads) {
             const long long cx = c0[0] + c % nx, cy = c0[1] + (c / nx) % ny, cz = c0[2] + c / (nx * ny);
-            if (cx < 0 || cy < 0 || cz < 0 || cx >= p.cellDims[0] || cy >= p.cellDims[1] || cz >= p.cellDims[2]) continue;
-            const long long at = searchCell(p, mortonKey(cx, cy, cz));
+            const long long at = findCell(p.cells, cx, cy, cz);
             if (at < 0) continue;
             const int slot = atomicAdd(&cellsInChunk, 1);
-            cellBegin[slot] = p.starts[at];
-            cellPrefix[slot + 1] = p.starts[at + 1] - p.starts[at];
+            cellBegin[slot] = p.cells.starts[at];
+            cellPrefix[slot + 1] = p.cells.starts[at + 1] - p.cells.starts[at];
         }
         __syncthreads();
         const int cells = cellsInChunk;
@@ -120,10 +94,10 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
                         else hi = mid - 1;
                     }
                     const uint32_t i = cellBegin[lo] + (flat - cellPrefix[lo]);
-                    const float3 x = p.positions[i];
+                    const float3 x = p.cells.positions[i];
                     // Leaf-local coordinates, computed like the CPU (difference in double).
                     q = make_float4(float(double(x.x) - o[0]), float(double(x.y) - o[1]), float(double(x.z) - o[2]),
-                                    p.radii ? p.radii[i] : 0.f);
+                                    p.cells.radii ? p.cells.radii[i] : 0.f);
                 }
                 tile[threadIdx.x] = q;
             }
@@ -176,19 +150,25 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
 
 } // namespace
 
+field::FieldConstants fieldConstants(const FieldSettings& s, bool perParticleRadii)
+{
+    field::FieldConstants c;
+    c.influenceRadius = s.influenceRadius;
+    c.radius = s.radius;
+    c.perParticleRadii = perParticleRadii;
+    c.ssp07 = s.ssp07;
+    c.tLow = s.tLow, c.tHigh = s.tHigh;
+    c.background = s.background;
+    return c;
+}
+
 void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsigned long long* masks,
                   size_t leafCount, double voxelSize, const field::FieldConstants& constants, float* out,
                   cudaStream_t stream, const uint32_t* compactOffsets)
 {
     if (leafCount == 0) return;
     Params p{};
-    p.positions = cells.positions;
-    p.radii = cells.radii;
-    p.keys = cells.keys;
-    p.starts = cells.starts;
-    p.cellCount = cells.cellCount;
-    p.cellSize = cells.cellSize;
-    for (int a = 0; a < 3; ++a) p.cellOrigin[a] = cells.origin[a], p.cellDims[a] = cells.dims[a];
+    p.cells = cells;
     p.leafOrigins = origins;
     p.leafActive = masks;
     p.dx = voxelSize, p.R = constants.influenceRadius;
@@ -201,9 +181,11 @@ void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsign
 
 std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* streamPtr)
 {
-    std::vector<float> out(in.leafCount * 512, in.background);
+    std::vector<float> out(in.leafCount * 512, in.field.background);
     if (in.leafCount == 0) return out;
-    if (!(in.cellSize > 0 && in.voxelSize > 0 && in.influenceRadius > 0)) throw Error("gatherField: invalid sizes");
+    if (!(in.cellSize > 0 && in.field.voxelSize > 0 && in.field.influenceRadius > 0)) throw Error("gatherField: invalid sizes");
+    if (in.tableSize == 0 || (in.tableSize & (in.tableSize - 1)))
+        throw Error("gatherField: the cell hash table size must be a power of two");
     const Stream ownStream(streamPtr);
     const cudaStream_t stream = ownStream.get();
     DeviceMemory mem(stream);
@@ -213,23 +195,19 @@ std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* 
     cells.count = in.particleCount;
     cells.positions = mem.upload(reinterpret_cast<const float3*>(in.positions), in.particleCount);
     cells.radii = in.radii ? mem.upload(in.radii, in.particleCount) : nullptr;
-    cells.keys = mem.upload(reinterpret_cast<const unsigned long long*>(in.cellKeys), in.cellCount);
     cells.starts = mem.upload(in.cellStarts, in.cellCount + 1);
+    cells.tableKeys = mem.upload(reinterpret_cast<const unsigned long long*>(in.tableKeys), in.tableSize);
+    cells.tableCells = mem.upload(in.tableCells, in.tableSize);
+    cells.tableMask = in.tableSize - 1;
     cells.cellCount = in.cellCount;
     cells.cellSize = in.cellSize;
     for (int a = 0; a < 3; ++a) cells.origin[a] = in.cellOrigin[a], cells.dims[a] = int(in.cellDims[a]);
     const int32_t* origins = mem.upload(in.leafOrigins, 3 * in.leafCount);
     const unsigned long long* masks = mem.upload(reinterpret_cast<const unsigned long long*>(in.leafActive), 8 * in.leafCount);
-    field::FieldConstants constants;
-    constants.influenceRadius = in.influenceRadius;
-    constants.radius = in.radius;
-    constants.perParticleRadii = in.radii != nullptr;
-    constants.ssp07 = in.ssp07;
-    constants.tLow = in.tLow, constants.tHigh = in.tHigh;
-    constants.background = in.background;
+    const field::FieldConstants constants = fieldConstants(in.field, in.radii != nullptr);
     float* values = mem.alloc<float>(out.size());
     events.mark("upload");
-    gatherLeaves(cells, origins, masks, in.leafCount, in.voxelSize, constants, values, stream);
+    gatherLeaves(cells, origins, masks, in.leafCount, in.field.voxelSize, constants, values, stream);
     events.mark("gather kernel");
     FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float), cudaMemcpyDeviceToHost, stream));
     events.mark("download");

@@ -110,7 +110,7 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
 
     BandSettings bs;
     bs.width = s.bandWidth;
-    bs.invDx = 1 / s.voxelSize;
+    bs.invDx = 1 / s.field.voxelSize;
     bs.isolatedSeeds = s.keepIsolated;
     const DeviceLeaves leaves = markBand(cells, classes, bs, *m.mem, m.stream);
     events.mark("band");
@@ -119,18 +119,13 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     std::sort(m.isolated.begin(), m.isolated.end());
     m.mem->release(classes);
 
-    m.voxelSize = s.voxelSize;
-    m.constants.influenceRadius = s.influenceRadius;
-    m.constants.radius = s.radius;
-    m.constants.perParticleRadii = cells.radii != nullptr;
-    m.constants.ssp07 = s.ssp07;
-    m.constants.tLow = s.tLow, m.constants.tHigh = s.tHigh;
-    m.constants.background = s.background;
+    m.voxelSize = s.field.voxelSize;
+    m.constants = fieldConstants(s.field, cells.radii != nullptr);
     events.mark("isolated");
     size_t activeCount = 0;
     uint32_t* offsets = activeOffsets(leaves.masks, leaves.count, activeCount, *m.mem, m.stream);
     float* values = m.mem->alloc<float>(activeCount);
-    gatherLeaves(cells, leaves.origins, leaves.masks, leaves.count, s.voxelSize, m.constants,
+    gatherLeaves(cells, leaves.origins, leaves.masks, leaves.count, m.voxelSize, m.constants,
                  values, m.stream, offsets);
     events.mark("gather");
 

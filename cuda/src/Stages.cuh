@@ -7,6 +7,8 @@
 #include "classify/ClassRule.h"
 #include "field/FieldMath.h"
 
+#include <fluidsurf/cuda/FieldGather.h>
+
 #include <cstdint>
 
 namespace fluidsurf {
@@ -66,6 +68,9 @@ DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const Ba
                       DeviceMemory& mem, cudaStream_t stream);
 
 // --- FieldGather.cu --------------------------------------------------------------------------
+
+/// FieldMath's constants from the facade's settings.
+field::FieldConstants fieldConstants(const FieldSettings& s, bool perParticleRadii);
 
 /// phi for the 512 voxels of every leaf into out (leaf after leaf; inactive: background); or,
 /// with compactOffsets (per leaf, the number of active voxels in the leaves before it), only the

@@ -170,15 +170,11 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
         } catch (const Error& e) {
             // CUDA failed (out of device memory, ...): auto means "the GPU if it can", so the CPU
             // takes over and says why; an explicit cuda request reports the failure.
+            // The CPU stages set every count again; the GPU's stages and memory are only filled
+            // on success.
             if (params.device == Device::Cuda) throw;
-            const std::string why = e.what();
-            const RasterizeStats before = stats;
-            stats = RasterizeStats();
-            stats.particles = before.particles, stats.bandWidth = before.bandWidth;
-            stats.stages = before.stages;
-            stats.device = "cpu (CUDA failed: " + why + ")";
+            stats.device = std::string("cpu (CUDA failed: ") + e.what() + ")";
             result.isolatedParticles.clear();
-            tree = nullptr;
             onGpu = false;
         }
     }

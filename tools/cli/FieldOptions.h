@@ -7,6 +7,9 @@
 #include <fluidsurf/Rasterize.h>
 
 #include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include <memory>
 
 #include <string>
 
@@ -34,6 +37,8 @@ Params makeParams(const FieldOptions& o, double radius);
 void prepareDevice(const FieldOptions& o);
 
 double peakRssMiB();
+/// -j: at most threads worker threads while the returned object lives (all cores for <= 0).
+std::unique_ptr<tbb::global_control> limitThreads(int threads);
 /// With -v: where the field gather ran, and the GPU's own timings when it was a GPU.
 void printDevice(const RasterizeStats& stats);
 bool endsWith(const std::string& s, const std::string& suffix);

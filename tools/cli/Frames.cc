@@ -24,5 +24,17 @@ std::vector<FrameJob> planFrames(const std::string& input, const std::string& ou
     return jobs;
 }
 
+std::vector<FrameJob> planVdbFrames(const std::string& input, const std::string& output,
+                                    const std::string& range, const std::string& what)
+{
+    std::vector<FrameJob> jobs = planFrames(input, output, range);
+    for (const FrameJob& job : jobs) {
+        const std::string& out = job.output;
+        if (out.size() < 4 || out.compare(out.size() - 4, 4, ".vdb") != 0)
+            throw ValueError(what + " '" + out + "' must end in .vdb");
+    }
+    return jobs;
+}
+
 } // namespace cli
 } // namespace fluidsurf

@@ -21,5 +21,9 @@ struct FrameJob
 std::vector<FrameJob> planFrames(const std::string& input, const std::string& output,
                                  const std::string& range);
 
+/// planFrames for level-set outputs: ValueError "<what> 'NAME' must end in .vdb" otherwise.
+std::vector<FrameJob> planVdbFrames(const std::string& input, const std::string& output,
+                                    const std::string& range, const std::string& what);
+
 } // namespace cli
 } // namespace fluidsurf

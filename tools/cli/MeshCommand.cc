@@ -12,7 +12,6 @@
 #include <fluidsurf/io/MeshIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
-#include <tbb/global_control.h>
 
 #include <chrono>
 #include <cstdio>
@@ -78,12 +77,6 @@ void meshAndWrite(const MeshOptions& o, const openvdb::FloatGrid& grid, const Fr
     if (o.check) std::printf("  mesh: %s\n", describe(checkMesh(mesh)).c_str());
 }
 
-std::unique_ptr<tbb::global_control> limitThreads(int threads)
-{
-    if (threads <= 0) return nullptr;
-    return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
-}
-
 } // namespace
 
 Runner addMeshCommand(CLI::App& app)
@@ -133,11 +126,7 @@ Runner addReconstructCommand(CLI::App& app)
     return [o]() {
         auto jobs = planMeshJobs(*o);
         std::vector<FrameJob> vdbJobs;
-        if (!o->vdb.empty()) {
-            vdbJobs = planFrames(o->input, o->vdb, o->frames);
-            for (const FrameJob& job : vdbJobs)
-                if (!endsWith(job.output, ".vdb")) throw ValueError("--vdb '" + job.output + "' must end in .vdb");
-        }
+        if (!o->vdb.empty()) vdbJobs = planVdbFrames(o->input, o->vdb, o->frames, "--vdb");
         const auto threads = limitThreads(o->threads);
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;

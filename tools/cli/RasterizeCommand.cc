@@ -9,7 +9,6 @@
 #include <fluidsurf/Rasterize.h>
 #include <fluidsurf/io/ParticleIO.h>
 
-#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <chrono>
@@ -48,12 +47,8 @@ Runner addRasterizeCommand(CLI::App& app)
                 "Writes an OpenVDB level set named 'surface' (negative inside, background\n"
                 "half-width * voxel). Isolated particles (no neighbour within h) are not in the grid.");
     return [o]() {
-        const auto jobs = planFrames(o->input, o->output, o->frames);
-        for (const FrameJob& job : jobs)
-            if (!endsWith(job.output, ".vdb")) throw ValueError("output '" + job.output + "' must end in .vdb");
-        std::unique_ptr<tbb::global_control> threads;
-        if (o->threads > 0)
-            threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, o->threads);
+        const auto jobs = planVdbFrames(o->input, o->output, o->frames, "output");
+        const auto threads = limitThreads(o->threads);
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
         prepareDevice(o->field);

@@ -5,6 +5,9 @@
 //   neighbors (Z-order cells) -> classify (surface / interior / splash / isolated)
 //   -> narrow band (active voxels near surface particles) -> field (TBB gather) -> level set
 //
+// With Params::device cuda (or auto and a GPU) the stages up to the field run on the GPU and
+// give the same active voxels and classes; values agree with the CPU's within 1e-5 r.
+//
 // Isolated particles (no neighbour within h) are left out of the grid and listed in the result.
 // The output is identical for any thread count; run under tbb::global_control to limit threads.
 #pragma once
@@ -36,10 +39,14 @@ struct RasterizeStats
     double bandWidth = 0;         ///< half width actually used, world units
     std::vector<StageTime> stages;
     double totalSeconds() const;
-    std::string device = "cpu";       ///< where the field gather ran: "cpu" or the GPU's name
-    std::vector<StageTime> gpuStages;  ///< with CUDA: upload, gather kernel, download (CUDA
-                                       ///< events, inside the "field" stage; not in totalSeconds)
-    size_t gpuBytes = 0;               ///< device memory the gather allocated
+    /// Where the field ran: "cpu", the GPU's name, or with Device::Auto "cpu (CUDA failed: why)".
+    std::string device = "cpu";
+    /// With CUDA: the device's stages (upload, bounds, sort, cells, classify, band, isolated,
+    /// gather, download, completion gather; gather-full: upload, gather, download), GPU time from
+    /// CUDA events, inside the host stages above and not in totalSeconds.
+    std::vector<StageTime> gpuStages;
+    size_t gpuBytes = 0;  ///< peak device memory the CUDA stages held
+
 };
 
 struct RasterizeResult

@@ -36,23 +36,30 @@ template <typename Compute> size_t fillActiveVoxels(openvdb::FloatTree& tree, Co
     const size_t n = leaves.leafCount();
     std::vector<int32_t> origins(3 * n);
     std::vector<uint64_t> masks(8 * n);
-    std::vector<size_t> active(n);
     leaves.foreach ([&](const LeafT& leaf, size_t i) {
         for (int a = 0; a < 3; ++a)
             origins[3 * i + a] = leaf.origin()[a];
         for (int w = 0; w < 8; ++w)
             masks[8 * i + w] = leaf.getValueMask().template getWord<uint64_t>(w);
-        active[i] = leaf.onVoxelCount();
     });
     const std::vector<float> values = compute(origins.data(), masks.data(), n);
     leaves.foreach ([&](LeafT& leaf, size_t i) {
         for (auto v = leaf.beginValueOn(); v; ++v)
             v.setValue(values[i * 512 + v.pos()]);
     });
-    size_t evaluations = 0;
-    for (size_t a : active)
-        evaluations += a;
-    return evaluations;
+    return tree.activeVoxelCount();
+}
+
+cuda::FieldSettings fieldSettings(const Params& params)
+{
+    cuda::FieldSettings f;
+    f.voxelSize = params.voxelSize;
+    f.influenceRadius = params.influenceRadius;
+    f.radius = params.radius;
+    f.tLow = params.tLow, f.tHigh = params.tHigh;
+    f.background = float(params.background());
+    f.ssp07 = params.field == FieldKind::Ssp07;
+    return f;
 }
 
 /// A tree from leaf blocks: leaves built in parallel, then linked in (cheap, serial).
@@ -118,7 +125,9 @@ size_t evaluateFieldCuda(openvdb::FloatTree& tree, const neighbors::CellIndex& p
             in.positions = particles.positions.data();
             in.radii = particles.radii.empty() ? nullptr : particles.radii.data();
             in.particleCount = particles.size();
-            in.cellKeys = particles.keys.data();
+            in.tableKeys = particles.tableKeys.data();
+        in.tableCells = particles.tableCells.data();
+        in.tableSize = particles.tableKeys.size();
             in.cellStarts = particles.starts.data();
             in.cellCount = particles.cellCount();
             in.cellSize = particles.cellSize;
@@ -127,12 +136,7 @@ size_t evaluateFieldCuda(openvdb::FloatTree& tree, const neighbors::CellIndex& p
             in.leafOrigins = origins;
             in.leafActive = masks;
             in.leafCount = n;
-            in.voxelSize = params.voxelSize;
-            in.influenceRadius = params.influenceRadius;
-            in.radius = params.radius;
-            in.tLow = params.tLow, in.tHigh = params.tHigh;
-            in.background = float(params.background());
-            in.ssp07 = params.field == FieldKind::Ssp07;
+            in.field = fieldSettings(params);
             return cuda::gatherField(in, &times);
         });
     stats.device = name;
@@ -178,11 +182,8 @@ rasterizeNarrowBandCuda(const std::vector<Vec3f>& positions, const std::vector<f
     s.colorFieldThreshold = params.colorFieldThreshold,
     s.colorGradientThreshold = params.colorGradientThreshold;
     s.keepIsolated = params.keepIsolated;
-    s.voxelSize = params.voxelSize, s.bandWidth = bandWidth;
-    s.influenceRadius = params.influenceRadius, s.radius = params.radius;
-    s.tLow = params.tLow, s.tHigh = params.tHigh;
-    s.background = float(params.background());
-    s.ssp07 = params.field == FieldKind::Ssp07;
+    s.bandWidth = bandWidth;
+    s.field = fieldSettings(params);
     const cuda::LeafBlocks blocks = pipeline.run(s);
     const cuda::ClassCounts& counts = pipeline.classCounts();
     stats.interior = counts.interior, stats.surface = counts.surface;
@@ -190,7 +191,7 @@ rasterizeNarrowBandCuda(const std::vector<Vec3f>& positions, const std::vector<f
     if (!params.keepIsolated) isolated = pipeline.isolatedParticles();
     stageDone("device field");
 
-    openvdb::FloatTree::Ptr tree = treeFromBlocks(blocks, s.background);
+    openvdb::FloatTree::Ptr tree = treeFromBlocks(blocks, s.field.background);
     stats.fieldEvaluations = tree->activeVoxelCount();
     stageDone("vdb build");
 

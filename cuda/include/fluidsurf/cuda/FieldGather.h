@@ -3,8 +3,8 @@
 // as the CPU (lib/src/field/FieldMath.h), summed in a different order (values agree to ~1e-6 r).
 //
 // Inputs are plain arrays the host builds from its cell index and band topology: particles in
-// cell order with the sorted Morton keys of the occupied cells, and per leaf the voxel index of
-// its corner and 8 words of active bits (word x, bit y * 8 + z). One CUDA block per leaf: the
+// cell order with the ranges and hash table of the occupied cells, and per leaf the voxel index
+// of its corner and 8 words of active bits (word x, bit y * 8 + z). One CUDA block per leaf: the
 // block collects the occupied cells near its leaf, streams their particles through shared
 // memory in tiles, and each thread sums for its voxels.
 #pragma once
@@ -18,23 +18,32 @@
 namespace fluidsurf {
 namespace cuda {
 
+/// The field's parameters (fluidsurf::Params), lengths in world units.
+struct FieldSettings
+{
+    double voxelSize = 0, influenceRadius = 0, radius = 0, tLow = 0.4, tHigh = 3.5;
+    float background = 0;
+    bool ssp07 = true;
+};
+
 struct GatherInput
 {
     const Vec3f* positions = nullptr;   ///< particles in cell order
     const float* radii = nullptr;       ///< per particle, or null for the uniform radius
     size_t particleCount = 0;
-    const uint64_t* cellKeys = nullptr; ///< sorted Morton keys of the occupied cells
     const uint32_t* cellStarts = nullptr;  ///< cellCount + 1 offsets into the particles
     size_t cellCount = 0;
+    /// The cell index's hash table (neighbors::CellIndex): Morton key per slot (~0 when empty)
+    /// and the cell it names; tableSize is a power of two.
+    const uint64_t* tableKeys = nullptr;
+    const uint32_t* tableCells = nullptr;
+    size_t tableSize = 0;
     double cellSize = 0, cellOrigin[3] = {0, 0, 0};
     uint32_t cellDims[3] = {0, 0, 0};
     const int32_t* leafOrigins = nullptr;   ///< 3 per leaf: voxel index of the leaf's corner
     const uint64_t* leafActive = nullptr;   ///< 8 per leaf: active voxels
     size_t leafCount = 0;
-    // The field (see Params): lengths in world units.
-    double voxelSize = 0, influenceRadius = 0, radius = 0, tLow = 0.4, tHigh = 3.5;
-    float background = 0;
-    bool ssp07 = true;
+    FieldSettings field;
 };
 
 struct GatherTimes

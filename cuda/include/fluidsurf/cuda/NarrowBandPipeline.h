@@ -11,6 +11,7 @@
 #pragma once
 
 #include <fluidsurf/Vec3.h>
+#include <fluidsurf/cuda/FieldGather.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -35,11 +36,8 @@ struct PipelineSettings
     double colorFieldThreshold = 0, colorGradientThreshold = 0;
     bool keepIsolated = false;
     // Band (narrowband/NarrowBand.h): half width in world units.
-    double voxelSize = 0, bandWidth = 0;
-    // Field (field/FieldMath.h).
-    double influenceRadius = 0, radius = 0, tLow = 0.4, tHigh = 3.5;
-    float background = 0;
-    bool ssp07 = true;
+    double bandWidth = 0;
+    FieldSettings field;
 };
 
 struct LeafBlocks
