@@ -8,6 +8,11 @@ PACKAGES=(
     libopenvdb-dev libopenvdb-tools libnanovdb-dev libtbb-dev libblosc-dev
     libboost-iostreams-dev libopenmesh-dev libgtest-dev libgmock-dev libbenchmark-dev
     libcli11-dev zlib1g-dev cmake ninja-build g++
+    # The CLI end-to-end tests: /usr/bin/python3 checks OBJ files and memory figures
+    # independently, numpy re-reads the .npy round trip, pyopenvdb opens the written level set.
+    python3 python3-numpy python3-openvdb
+    # CI's format check (tools/scripts/check-format.sh) against .clang-format.
+    clang-format
 )
 
 missing=()
