@@ -19,7 +19,8 @@ std::string sharedData()
 {
     for (const char* candidate : {FLUIDSURF_SHARED_DATA, "../shared/data"}) {
         struct stat st;
-        if (::stat((std::string(candidate) + "/real").c_str(), &st) == 0 && S_ISDIR(st.st_mode)) return candidate;
+        if (::stat((std::string(candidate) + "/real").c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+            return candidate;
     }
     return "";
 }
@@ -76,7 +77,8 @@ std::string zlibBytes(const std::string& data)
 {
     uLongf n = compressBound(uLong(data.size()));
     std::string out(n, '\0');
-    compress(reinterpret_cast<Bytef*>(&out[0]), &n, reinterpret_cast<const Bytef*>(data.data()), uLong(data.size()));
+    compress(reinterpret_cast<Bytef*>(&out[0]), &n, reinterpret_cast<const Bytef*>(data.data()),
+             uLong(data.size()));
     out.resize(n);
     return out;
 }
@@ -99,8 +101,8 @@ std::string base64(const std::string& d)
 
 ParticleSet readBytes(const std::string& bytes, io::ParticleFormat format, const io::ReadOptions& o)
 {
-    return io::readParticlesFromMemory(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), format,
-                                       "test-input", o);
+    return io::readParticlesFromMemory(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(),
+                                       format, "test-input", o);
 }
 
 std::string readError(const std::string& bytes, io::ParticleFormat format)

@@ -20,7 +20,7 @@ std::string sharedData();
 #define FLUIDSURF_REQUIRE_SHARED_DATA()                                                            \
     do {                                                                                           \
         if (::fluidsurf::test::sharedData().empty())                                               \
-            GTEST_SKIP() << "../shared/data is absent: real-frame test skipped";                  \
+            GTEST_SKIP() << "../shared/data is absent: real-frame test skipped";                   \
     } while (0)
 
 /// The small frames of ../shared/data/real with their particle radius (its README).
@@ -28,7 +28,7 @@ struct RealFrame
 {
     const char* name;
     double radius;
-    bool fluid = true;  ///< written by a fluid simulator (not scattered points)
+    bool fluid = true; ///< written by a fluid simulator (not scattered points)
 };
 
 inline const RealFrame kRealFrames[] = {
@@ -67,16 +67,15 @@ bool fileExists(const std::string& path);
 struct ByteBuilder
 {
     std::string s;
-    template <typename T>
-    ByteBuilder& be(T v)
+    template <typename T> ByteBuilder& be(T v)
     {
         char b[sizeof(T)];
         std::memcpy(b, &v, sizeof(T));
-        for (size_t i = 0; i < sizeof(T); ++i) s += b[sizeof(T) - 1 - i];
+        for (size_t i = 0; i < sizeof(T); ++i)
+            s += b[sizeof(T) - 1 - i];
         return *this;
     }
-    template <typename T>
-    ByteBuilder& le(T v)
+    template <typename T> ByteBuilder& le(T v)
     {
         char b[sizeof(T)];
         std::memcpy(b, &v, sizeof(T));
@@ -95,7 +94,8 @@ std::string zlibBytes(const std::string& data);
 std::string base64(const std::string& data);
 
 /// Read bytes as the given format through the public API.
-ParticleSet readBytes(const std::string& bytes, io::ParticleFormat format, const io::ReadOptions& o = {});
+ParticleSet readBytes(const std::string& bytes, io::ParticleFormat format,
+                      const io::ReadOptions& o = {});
 
 /// The InputError message of reading bytes, or "" if it read fine.
 std::string readError(const std::string& bytes, io::ParticleFormat format);

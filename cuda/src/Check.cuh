@@ -7,11 +7,11 @@
 
 #include <string>
 
-#define FLUIDSURF_CUDA_CHECK(call)                                                                  \
-    do {                                                                                         \
-        const cudaError_t err_ = (call);                                                         \
-        if (err_ != cudaSuccess)                                                                 \
-            throw ::fluidsurf::Error(std::string("CUDA error: ") + #call + " failed: " +         \
-                                     cudaGetErrorString(err_) + " (" + __FILE__ + ":" +          \
-                                     std::to_string(__LINE__) + ")");                            \
+#define FLUIDSURF_CUDA_CHECK(call)                                                                 \
+    do {                                                                                           \
+        const cudaError_t err_ = (call);                                                           \
+        if (err_ != cudaSuccess)                                                                   \
+            throw ::fluidsurf::Error(std::string("CUDA error: ") + #call +                         \
+                                     " failed: " + cudaGetErrorString(err_) + " (" + __FILE__ +    \
+                                     ":" + std::to_string(__LINE__) + ")");                        \
     } while (0)

@@ -13,7 +13,7 @@ DeviceInfo queryDevice()
     const cudaError_t err = cudaGetDeviceCount(&count);
     if (err != cudaSuccess) {
         info.reason = std::string("no usable CUDA device: ") + cudaGetErrorString(err);
-        cudaGetLastError();  // clear the sticky error
+        cudaGetLastError(); // clear the sticky error
         return info;
     }
     if (count == 0) {
@@ -39,10 +39,11 @@ DeviceInfo openDevice()
     static const DeviceInfo opened = [] {
         DeviceInfo info = queryDevice();
         if (info.usable) {
-            const cudaError_t err = cudaFree(nullptr);  // forces context creation
+            const cudaError_t err = cudaFree(nullptr); // forces context creation
             if (err != cudaSuccess) {
                 info.usable = false;
-                info.reason = std::string("cannot create a CUDA context: ") + cudaGetErrorString(err);
+                info.reason =
+                    std::string("cannot create a CUDA context: ") + cudaGetErrorString(err);
                 cudaGetLastError();
             }
         }

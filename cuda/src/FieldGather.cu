@@ -10,10 +10,10 @@ namespace cuda {
 
 namespace {
 
-constexpr int kThreads = 256;         // 2 voxels of the 8^3 leaf per thread
+constexpr int kThreads = 256; // 2 voxels of the 8^3 leaf per thread
 constexpr int kVoxelsPerThread = 512 / kThreads;
-constexpr int kTile = 256;            // particles staged in shared memory at a time
-constexpr int kCellChunk = 512;       // occupied-cell lookups per pass
+constexpr int kTile = 256;      // particles staged in shared memory at a time
+constexpr int kCellChunk = 512; // occupied-cell lookups per pass
 
 struct Params
 {
@@ -23,12 +23,13 @@ struct Params
     double dx, R;
     field::FieldConstants constants;
     float* out;
-    const uint32_t* compactOffsets;  // non-null: out holds only the active voxels (see Stages.cuh)
+    const uint32_t* compactOffsets; // non-null: out holds only the active voxels (see Stages.cuh)
 };
 
 struct Sums
 {
-    float w = 0, d0 = 0, d1 = 0, d2 = 0, r = 0, g0 = 0, g1 = 0, g2 = 0, m0 = 0, m1 = 0, m2 = 0, m3 = 0, m4 = 0, m5 = 0;
+    float w = 0, d0 = 0, d1 = 0, d2 = 0, r = 0, g0 = 0, g1 = 0, g2 = 0, m0 = 0, m1 = 0, m2 = 0,
+          m3 = 0, m4 = 0, m5 = 0;
 };
 
 __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
@@ -38,7 +39,8 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
     __shared__ int cellsInChunk;
 
     const int leaf = blockIdx.x;
-    const int3 origin = make_int3(p.leafOrigins[3 * leaf], p.leafOrigins[3 * leaf + 1], p.leafOrigins[3 * leaf + 2]);
+    const int3 origin = make_int3(p.leafOrigins[3 * leaf], p.leafOrigins[3 * leaf + 1],
+                                  p.leafOrigins[3 * leaf + 2]);
     const double o[3] = {origin.x * p.dx, origin.y * p.dx, origin.z * p.dx};
     const float invR2 = float(1 / (p.R * p.R));
 
@@ -47,10 +49,11 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
     float vx[kVoxelsPerThread], vy[kVoxelsPerThread], vz[kVoxelsPerThread];
     Sums acc[kVoxelsPerThread];
     for (int k = 0; k < kVoxelsPerThread; ++k) {
-        const int v = threadIdx.x + k * kThreads;  // OpenVDB order: x * 64 + y * 8 + z
+        const int v = threadIdx.x + k * kThreads; // OpenVDB order: x * 64 + y * 8 + z
         voxel[k] = v;
         active[k] = (p.leafActive[8 * leaf + (v >> 6)] >> (v & 63)) & 1ull;
-        vx[k] = float((v >> 6) * p.dx), vy[k] = float(((v >> 3) & 7) * p.dx), vz[k] = float((v & 7) * p.dx);
+        vx[k] = float((v >> 6) * p.dx), vy[k] = float(((v >> 3) & 7) * p.dx),
+        vz[k] = float((v & 7) * p.dx);
     }
 
     // The occupied cells overlapping the leaf's voxel box widened by R.
@@ -66,8 +69,10 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
         __syncthreads();
         // Each thread looks up a few cells of the chunk; the found ones are appended (their
         // order does not matter for correctness, only for the last bits of the sums).
-        for (long long c = chunk + threadIdx.x; c < chunk + kCellChunk && c < boxCells; c += kThreads) {
-            const long long cx = c0[0] + c % nx, cy = c0[1] + (c / nx) % ny, cz = c0[2] + c / (nx * ny);
+        for (long long c = chunk + threadIdx.x; c < chunk + kCellChunk && c < boxCells;
+             c += kThreads) {
+            const long long cx = c0[0] + c % nx, cy = c0[1] + (c / nx) % ny,
+                            cz = c0[2] + c / (nx * ny);
             const long long at = findCell(p.cells, cx, cy, cz);
             if (at < 0) continue;
             const int slot = atomicAdd(&cellsInChunk, 1);
@@ -78,25 +83,29 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
         const int cells = cellsInChunk;
         if (threadIdx.x == 0) {
             cellPrefix[0] = 0;
-            for (int i = 0; i < cells; ++i) cellPrefix[i + 1] += cellPrefix[i];
+            for (int i = 0; i < cells; ++i)
+                cellPrefix[i + 1] += cellPrefix[i];
         }
         __syncthreads();
         const uint32_t total = cellPrefix[cells];
         for (uint32_t base = 0; base < total; base += kTile) {
             const uint32_t flat = base + threadIdx.x;
             if (threadIdx.x < kTile) {
-                float4 q = make_float4(3e30f, 3e30f, 3e30f, 0.f);  // past the end: adds nothing
+                float4 q = make_float4(3e30f, 3e30f, 3e30f, 0.f); // past the end: adds nothing
                 if (flat < total) {
-                    int lo = 0, hi = cells - 1;  // last cell whose prefix <= flat
+                    int lo = 0, hi = cells - 1; // last cell whose prefix <= flat
                     while (lo < hi) {
                         const int mid = (lo + hi + 1) / 2;
-                        if (cellPrefix[mid] <= flat) lo = mid;
-                        else hi = mid - 1;
+                        if (cellPrefix[mid] <= flat)
+                            lo = mid;
+                        else
+                            hi = mid - 1;
                     }
                     const uint32_t i = cellBegin[lo] + (flat - cellPrefix[lo]);
                     const float3 x = p.cells.positions[i];
                     // Leaf-local coordinates, computed like the CPU (difference in double).
-                    q = make_float4(float(double(x.x) - o[0]), float(double(x.y) - o[1]), float(double(x.z) - o[2]),
+                    q = make_float4(float(double(x.x) - o[0]), float(double(x.y) - o[1]),
+                                    float(double(x.z) - o[2]),
                                     p.cells.radii ? p.cells.radii[i] : 0.f);
                 }
                 tile[threadIdx.x] = q;
@@ -111,7 +120,7 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
                     const float ex = q.x - vx[k], ey = q.y - vy[k], ez = q.z - vz[k];
                     const float s2 = (ex * ex + ey * ey + ez * ez) * invR2;
                     float t = 1.f - s2;
-                    if (!(t > 1e-6f)) continue;  // the CPU's cut-off (FieldValue.h)
+                    if (!(t > 1e-6f)) continue; // the CPU's cut-off (FieldValue.h)
                     const float t2 = t * t, wt = t2 * t;
                     a.w += wt;
                     a.d0 += wt * ex, a.d1 += wt * ey, a.d2 += wt * ez;
@@ -133,7 +142,8 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
             s.w = a.w, s.r = a.r;
             s.d[0] = a.d0, s.d[1] = a.d1, s.d[2] = a.d2;
             s.g[0] = a.g0, s.g[1] = a.g1, s.g[2] = a.g2;
-            s.m[0] = a.m0, s.m[1] = a.m1, s.m[2] = a.m2, s.m[3] = a.m3, s.m[4] = a.m4, s.m[5] = a.m5;
+            s.m[0] = a.m0, s.m[1] = a.m1, s.m[2] = a.m2, s.m[3] = a.m3, s.m[4] = a.m4,
+            s.m[5] = a.m5;
             value = field::fieldValue(s, p.constants);
         }
         if (!p.compactOffsets) {
@@ -142,7 +152,8 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
             // Rank of the voxel among the leaf's active voxels: the bits below it.
             const int v = voxel[k], word = v >> 6;
             uint32_t rank = __popcll(p.leafActive[8 * leaf + word] & ((1ull << (v & 63)) - 1));
-            for (int w = 0; w < word; ++w) rank += __popcll(p.leafActive[8 * leaf + w]);
+            for (int w = 0; w < word; ++w)
+                rank += __popcll(p.leafActive[8 * leaf + w]);
             p.out[p.compactOffsets[leaf] + rank] = value;
         }
     }
@@ -163,8 +174,8 @@ field::FieldConstants fieldConstants(const FieldSettings& s, bool perParticleRad
 }
 
 void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsigned long long* masks,
-                  size_t leafCount, double voxelSize, const field::FieldConstants& constants, float* out,
-                  cudaStream_t stream, const uint32_t* compactOffsets)
+                  size_t leafCount, double voxelSize, const field::FieldConstants& constants,
+                  float* out, cudaStream_t stream, const uint32_t* compactOffsets)
 {
     if (leafCount == 0) return;
     Params p{};
@@ -183,7 +194,8 @@ std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* 
 {
     std::vector<float> out(in.leafCount * 512, in.field.background);
     if (in.leafCount == 0) return out;
-    if (!(in.cellSize > 0 && in.field.voxelSize > 0 && in.field.influenceRadius > 0)) throw Error("gatherField: invalid sizes");
+    if (!(in.cellSize > 0 && in.field.voxelSize > 0 && in.field.influenceRadius > 0))
+        throw Error("gatherField: invalid sizes");
     if (in.tableSize == 0 || (in.tableSize & (in.tableSize - 1)))
         throw Error("gatherField: the cell hash table size must be a power of two");
     const Stream ownStream(streamPtr);
@@ -196,20 +208,25 @@ std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* 
     cells.positions = mem.upload(reinterpret_cast<const float3*>(in.positions), in.particleCount);
     cells.radii = in.radii ? mem.upload(in.radii, in.particleCount) : nullptr;
     cells.starts = mem.upload(in.cellStarts, in.cellCount + 1);
-    cells.tableKeys = mem.upload(reinterpret_cast<const unsigned long long*>(in.tableKeys), in.tableSize);
+    cells.tableKeys =
+        mem.upload(reinterpret_cast<const unsigned long long*>(in.tableKeys), in.tableSize);
     cells.tableCells = mem.upload(in.tableCells, in.tableSize);
     cells.tableMask = in.tableSize - 1;
     cells.cellCount = in.cellCount;
     cells.cellSize = in.cellSize;
-    for (int a = 0; a < 3; ++a) cells.origin[a] = in.cellOrigin[a], cells.dims[a] = int(in.cellDims[a]);
+    for (int a = 0; a < 3; ++a)
+        cells.origin[a] = in.cellOrigin[a], cells.dims[a] = int(in.cellDims[a]);
     const int32_t* origins = mem.upload(in.leafOrigins, 3 * in.leafCount);
-    const unsigned long long* masks = mem.upload(reinterpret_cast<const unsigned long long*>(in.leafActive), 8 * in.leafCount);
+    const unsigned long long* masks =
+        mem.upload(reinterpret_cast<const unsigned long long*>(in.leafActive), 8 * in.leafCount);
     const field::FieldConstants constants = fieldConstants(in.field, in.radii != nullptr);
     float* values = mem.alloc<float>(out.size());
     events.mark("upload");
-    gatherLeaves(cells, origins, masks, in.leafCount, in.field.voxelSize, constants, values, stream);
+    gatherLeaves(cells, origins, masks, in.leafCount, in.field.voxelSize, constants, values,
+                 stream);
     events.mark("gather kernel");
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float), cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float),
+                                         cudaMemcpyDeviceToHost, stream));
     events.mark("download");
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
     if (times) {

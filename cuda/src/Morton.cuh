@@ -18,7 +18,8 @@ __device__ __forceinline__ unsigned long long spreadBits(unsigned long long v)
 }
 
 /// The Morton key of cell (cx, cy, cz).
-__device__ __forceinline__ unsigned long long mortonKey(unsigned long long cx, unsigned long long cy, unsigned long long cz)
+__device__ __forceinline__ unsigned long long
+mortonKey(unsigned long long cx, unsigned long long cy, unsigned long long cz)
 {
     return spreadBits(cx) | spreadBits(cy) << 1 | spreadBits(cz) << 2;
 }

@@ -24,7 +24,8 @@ __global__ void mortonKernel(const float3* __restrict__ pos, size_t n, float3 or
     const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i >= n) return;
     const float3 p = pos[i];
-    codes[i] = mortonKey(cellOf(p.x, origin.x, inv), cellOf(p.y, origin.y, inv), cellOf(p.z, origin.z, inv));
+    codes[i] = mortonKey(cellOf(p.x, origin.x, inv), cellOf(p.y, origin.y, inv),
+                         cellOf(p.z, origin.z, inv));
 }
 
 struct DeviceFree
@@ -47,14 +48,16 @@ std::vector<uint64_t> mortonCodes(const Vec3f* positions, size_t count, const Ve
     std::unique_ptr<void, DeviceFree> posGuard(dPos);
     FLUIDSURF_CUDA_CHECK(cudaMalloc(&dCodes, count * sizeof(uint64_t)));
     std::unique_ptr<void, DeviceFree> codeGuard(dCodes);
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(dPos, positions, count * sizeof(float3), cudaMemcpyHostToDevice, stream));
+    FLUIDSURF_CUDA_CHECK(
+        cudaMemcpyAsync(dPos, positions, count * sizeof(float3), cudaMemcpyHostToDevice, stream));
     const unsigned block = 256;
     const unsigned grid = unsigned((count + block - 1) / block);
     mortonKernel<<<grid, block, 0, stream>>>(static_cast<const float3*>(dPos), count,
-                                             make_float3(origin.x, origin.y, origin.z), 1.f / cellSize,
-                                             static_cast<uint64_t*>(dCodes));
+                                             make_float3(origin.x, origin.y, origin.z),
+                                             1.f / cellSize, static_cast<uint64_t*>(dCodes));
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(codes.data(), dCodes, count * sizeof(uint64_t), cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(codes.data(), dCodes, count * sizeof(uint64_t),
+                                         cudaMemcpyDeviceToHost, stream));
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
     return codes;
 }

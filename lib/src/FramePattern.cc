@@ -16,27 +16,33 @@ FramePattern::FramePattern(const std::string& path) : mPath(path)
     size_t at = std::string::npos, len = 0;
     if (size_t b = path.find('{', nameStart); b != std::string::npos) {
         const size_t e = path.find('}', b);
-        if (e == std::string::npos) throw ValueError("frame pattern '" + path + "': '{' without '}'");
+        if (e == std::string::npos)
+            throw ValueError("frame pattern '" + path + "': '{' without '}'");
         const std::string spec = path.substr(b + 1, e - b - 1);
-        if (spec.empty()) mWidth = 0;
+        if (spec.empty())
+            mWidth = 0;
         else if (spec.size() >= 3 && spec[0] == ':' && spec[1] == '0' &&
                  std::all_of(spec.begin() + 2, spec.end(), ::isdigit))
             mWidth = std::stoi(spec.substr(2));
-        else if (spec.size() >= 2 && spec[0] == ':' && std::all_of(spec.begin() + 1, spec.end(), ::isdigit))
+        else if (spec.size() >= 2 && spec[0] == ':' &&
+                 std::all_of(spec.begin() + 1, spec.end(), ::isdigit))
             mWidth = std::stoi(spec.substr(1));
         else
-            throw ValueError("frame pattern '" + path + "': unsupported '{" + spec + "}' (use {} or {:04})");
+            throw ValueError("frame pattern '" + path + "': unsupported '{" + spec +
+                             "}' (use {} or {:04})");
         at = b;
         len = e - b + 1;
     } else if (size_t h = path.find('#', nameStart); h != std::string::npos) {
         size_t e = h;
-        while (e < path.size() && path[e] == '#') ++e;
+        while (e < path.size() && path[e] == '#')
+            ++e;
         mWidth = int(e - h);
         at = h;
         len = e - h;
     } else if (size_t p = path.find('%', nameStart); p != std::string::npos) {
         size_t e = p + 1;
-        while (e < path.size() && std::isdigit(uint8_t(path[e]))) ++e;
+        while (e < path.size() && std::isdigit(uint8_t(path[e])))
+            ++e;
         if (e >= path.size() || path[e] != 'd')
             throw ValueError("frame pattern '" + path + "': unsupported '%' spec (use %04d or %d)");
         const std::string w = path.substr(p + 1, e - p - 1);
@@ -45,7 +51,9 @@ FramePattern::FramePattern(const std::string& path) : mPath(path)
         len = e - p + 1;
     }
     if (at == std::string::npos) return;
-    if (mWidth > 12) throw ValueError("frame pattern '" + path + "': width " + std::to_string(mWidth) + " is too large");
+    if (mWidth > 12)
+        throw ValueError("frame pattern '" + path + "': width " + std::to_string(mWidth) +
+                         " is too large");
     mIsSequence = true;
     mPrefix = path.substr(0, at);
     mSuffix = path.substr(at + len);
@@ -73,8 +81,10 @@ std::vector<int> FramePattern::existingFrames() const
         if (n.size() <= namePrefix.size() + mSuffix.size()) continue;
         if (n.compare(0, namePrefix.size(), namePrefix) != 0) continue;
         if (n.compare(n.size() - mSuffix.size(), mSuffix.size(), mSuffix) != 0) continue;
-        const std::string mid = n.substr(namePrefix.size(), n.size() - namePrefix.size() - mSuffix.size());
-        if (mid.empty() || mid.size() > 9 || !std::all_of(mid.begin(), mid.end(), ::isdigit)) continue;
+        const std::string mid =
+            n.substr(namePrefix.size(), n.size() - namePrefix.size() - mSuffix.size());
+        if (mid.empty() || mid.size() > 9 || !std::all_of(mid.begin(), mid.end(), ::isdigit))
+            continue;
         if (mWidth > 0 && int(mid.size()) < mWidth) continue;
         const int f = std::stoi(mid);
         if (frame(f).substr(frame(f).size() - n.size()) == n) frames.push_back(f);
@@ -96,7 +106,8 @@ std::vector<int> parseFrameRange(const std::string& range)
     const int b = dash == std::string::npos ? a : parse(range.substr(dash + 1));
     if (b < a) throw ValueError("bad frame range '" + range + "': end before start");
     std::vector<int> frames;
-    for (int f = a; f <= b; ++f) frames.push_back(f);
+    for (int f = a; f <= b; ++f)
+        frames.push_back(f);
     return frames;
 }
 

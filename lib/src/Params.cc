@@ -21,7 +21,8 @@ namespace {
 void requirePositive(double v, const char* name)
 {
     if (!(v > 0) || !std::isfinite(v))
-        throw ValueError(std::string(name) + " must be a positive finite number (got " + std::to_string(v) + ")");
+        throw ValueError(std::string(name) + " must be a positive finite number (got " +
+                         std::to_string(v) + ")");
 }
 } // namespace
 
@@ -45,20 +46,27 @@ void Params::validate() const
     // The field kernel reads particles up to R from a vertex; a voxel many times smaller than
     // the particles only multiplies work and memory without adding detail.
     if (voxelSize < radius / 64)
-        throw ValueError("voxel size below r/64 is not supported (got " + std::to_string(voxelSize / radius) + " r)");
+        throw ValueError("voxel size below r/64 is not supported (got " +
+                         std::to_string(voxelSize / radius) + " r)");
     if (influenceRadius > 1000 * voxelSize)
         throw ValueError("influence radius above 1000 voxels is not supported (got " +
                          std::to_string(influenceRadius / voxelSize) + " voxels)");
 }
 
-const char* fieldName(FieldKind f) { return f == FieldKind::Ssp07 ? "ssp07" : "zb05"; }
+const char* fieldName(FieldKind f)
+{
+    return f == FieldKind::Ssp07 ? "ssp07" : "zb05";
+}
 
 const char* methodName(FieldMethod m)
 {
     switch (m) {
-    case FieldMethod::NarrowBand: return "narrow-band";
-    case FieldMethod::GatherFull: return "gather-full";
-    case FieldMethod::Scatter: return "scatter";
+    case FieldMethod::NarrowBand:
+        return "narrow-band";
+    case FieldMethod::GatherFull:
+        return "gather-full";
+    case FieldMethod::Scatter:
+        return "scatter";
     }
     return "?";
 }
@@ -78,7 +86,10 @@ FieldMethod methodFromName(const std::string& name)
     throw ValueError("unknown method '" + name + "' (narrow-band, gather-full, scatter)");
 }
 
-const char* deviceName(Device d) { return d == Device::Cpu ? "cpu" : d == Device::Cuda ? "cuda" : "auto"; }
+const char* deviceName(Device d)
+{
+    return d == Device::Cpu ? "cpu" : d == Device::Cuda ? "cuda" : "auto";
+}
 
 Device deviceFromName(const std::string& name)
 {

@@ -19,10 +19,14 @@ const char* Attribute::typeName() const
 const char* roleName(AttributeRole role)
 {
     switch (role) {
-    case AttributeRole::Radius: return "radius";
-    case AttributeRole::Velocity: return "velocity";
-    case AttributeRole::Density: return "density";
-    case AttributeRole::Id: return "id";
+    case AttributeRole::Radius:
+        return "radius";
+    case AttributeRole::Velocity:
+        return "velocity";
+    case AttributeRole::Density:
+        return "density";
+    case AttributeRole::Id:
+        return "id";
     }
     return "?";
 }
@@ -51,10 +55,19 @@ const Attribute* ParticleSet::find(AttributeRole role) const
     int components = 1;
     bool mustBeFloat = true;
     switch (role) {
-    case AttributeRole::Radius: break;
-    case AttributeRole::Velocity: aliases = kVelocity; components = 3; break;
-    case AttributeRole::Density: aliases = kDensity; break;
-    case AttributeRole::Id: aliases = kId; mustBeFloat = false; break;  // some writers use floats
+    case AttributeRole::Radius:
+        break;
+    case AttributeRole::Velocity:
+        aliases = kVelocity;
+        components = 3;
+        break;
+    case AttributeRole::Density:
+        aliases = kDensity;
+        break;
+    case AttributeRole::Id:
+        aliases = kId;
+        mustBeFloat = false;
+        break; // some writers use floats
     }
     for (const char* const* alias = aliases; *alias; ++alias) {
         const Attribute* a = find(std::string(*alias));
@@ -91,15 +104,15 @@ Attribute& ParticleSet::addInt(const std::string& name, int components, std::vec
 BBox3f ParticleSet::bbox() const
 {
     BBox3f box;
-    for (const Vec3f& p : positions) box.expand(p);
+    for (const Vec3f& p : positions)
+        box.expand(p);
     return box;
 }
 
 void ParticleSet::validate() const
 {
     for (const Attribute& a : attributes) {
-        if (a.components < 1)
-            throw ValueError("attribute '" + a.name + "' has no components");
+        if (a.components < 1) throw ValueError("attribute '" + a.name + "' has no components");
         if (a.size() != size() * size_t(a.components))
             throw ValueError("attribute '" + a.name + "' holds " + std::to_string(a.size()) +
                              " values, expected " + std::to_string(size() * a.components));
@@ -114,7 +127,8 @@ void compact(std::vector<T>& values, const std::vector<char>& keep, int componen
     for (size_t i = 0; i < keep.size(); ++i) {
         if (!keep[i]) continue;
         if (out != i)
-            std::memmove(&values[out * components], &values[i * components], sizeof(T) * components);
+            std::memmove(&values[out * components], &values[i * components],
+                         sizeof(T) * components);
         ++out;
     }
     values.resize(out * components);
@@ -132,8 +146,10 @@ size_t ParticleSet::dropNonFinite()
     if (dropped == 0) return 0;
     compact(positions, keep, 1);
     for (Attribute& a : attributes) {
-        if (a.type == AttributeType::Float) compact(a.floats, keep, a.components);
-        else compact(a.ints, keep, a.components);
+        if (a.type == AttributeType::Float)
+            compact(a.floats, keep, a.components);
+        else
+            compact(a.ints, keep, a.components);
     }
     return dropped;
 }

@@ -21,7 +21,8 @@ namespace fluidsurf {
 double RasterizeStats::totalSeconds() const
 {
     double t = 0;
-    for (const StageTime& s : stages) t += s.seconds;
+    for (const StageTime& s : stages)
+        t += s.seconds;
     return t;
 }
 
@@ -49,20 +50,22 @@ std::vector<float> particleRadii(const ParticleSet& ps, const Params& params)
     if (!a) return {};
     for (size_t i = 0; i < a->floats.size(); ++i)
         if (!(a->floats[i] > 0) || !std::isfinite(a->floats[i]))
-            throw ValueError("radius attribute '" + a->name + "' of particle " + std::to_string(i) + " is " +
-                             std::to_string(a->floats[i]) + "; radii must be positive (or ignore the attribute)");
+            throw ValueError("radius attribute '" + a->name + "' of particle " + std::to_string(i) +
+                             " is " + std::to_string(a->floats[i]) +
+                             "; radii must be positive (or ignore the attribute)");
     return a->floats;
 }
 
 /// neighbors -> classify -> band (or bounding volume) -> field -> completion on the CPU, with
 /// the field gather on the GPU when onGpu.
-openvdb::FloatTree::Ptr cpuStages(const ParticleSet& ps, const std::vector<float>& radii, const Params& params,
-                                  bool onGpu, RasterizeResult& result, StageClock& clock)
+openvdb::FloatTree::Ptr cpuStages(const ParticleSet& ps, const std::vector<float>& radii,
+                                  const Params& params, bool onGpu, RasterizeResult& result,
+                                  StageClock& clock)
 {
     RasterizeStats& stats = result.stats;
     const double cellSize = std::min(params.influenceRadius, params.smoothingLength);
-    neighbors::CellIndex index =
-        neighbors::buildCellIndex(ps.positions.data(), radii.empty() ? nullptr : radii.data(), ps.size(), cellSize);
+    neighbors::CellIndex index = neighbors::buildCellIndex(
+        ps.positions.data(), radii.empty() ? nullptr : radii.data(), ps.size(), cellSize);
     clock.done("neighbors");
 
     const classify::Classification classes = classify::classifyParticles(index, params);
@@ -70,21 +73,24 @@ openvdb::FloatTree::Ptr cpuStages(const ParticleSet& ps, const std::vector<float
     stats.splash = classes.splash, stats.isolated = classes.isolated;
     if (!params.keepIsolated)
         for (size_t i = 0; i < classes.classes.size(); ++i)
-            if (classes.classes[i] == classify::Isolated) result.isolatedParticles.push_back(index.order[i]);
+            if (classes.classes[i] == classify::Isolated)
+                result.isolatedParticles.push_back(index.order[i]);
     std::sort(result.isolatedParticles.begin(), result.isolatedParticles.end());
     clock.done("classify");
 
     const float background = float(params.background());
     openvdb::FloatTree::Ptr tree;
     if (params.method == FieldMethod::NarrowBand) {
-        const openvdb::MaskTree::Ptr band = narrowband::buildNarrowBand(index, classes, params, stats.bandWidth);
+        const openvdb::MaskTree::Ptr band =
+            narrowband::buildNarrowBand(index, classes, params, stats.bandWidth);
         tree = std::make_shared<openvdb::FloatTree>(*band, background, openvdb::TopologyCopy());
         clock.done("narrow band");
     }
     // Isolated particles take no part in the field.
     if (classes.isolated && !params.keepIsolated) {
         std::vector<uint8_t> keep(classes.classes.size());
-        for (size_t i = 0; i < keep.size(); ++i) keep[i] = classes.classes[i] != classify::Isolated;
+        for (size_t i = 0; i < keep.size(); ++i)
+            keep[i] = classes.classes[i] != classify::Isolated;
         index = neighbors::selectParticles(index, keep);
     }
     if (params.method == FieldMethod::GatherFull) {
@@ -120,7 +126,8 @@ void prepareDevice(Device device)
     static std::future<void> opening = std::async(std::launch::async, [] { field::cudaUsable(); });
 }
 
-RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, const std::string& source)
+RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params,
+                                   const std::string& source)
 {
     params.validate();
     ps.validate();
@@ -132,7 +139,11 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
         throw ValueError("the scatter baseline runs on the CPU only (--device cpu)");
     // Looking for the GPU (and creating its context, unless the caller did earlier) runs on a
     // thread while the radii are checked.
-    struct GpuCheck { bool usable = false; std::string reason; };
+    struct GpuCheck
+    {
+        bool usable = false;
+        std::string reason;
+    };
     std::future<GpuCheck> gpuCheck;
     if (params.device != Device::Cpu && params.method != FieldMethod::Scatter)
         gpuCheck = std::async(std::launch::async, [] {
@@ -147,7 +158,8 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
 
     const std::vector<float> radii = particleRadii(ps, params);
     float maxRadius = float(params.radius);
-    for (float r : radii) maxRadius = std::max(maxRadius, r);
+    for (float r : radii)
+        maxRadius = std::max(maxRadius, r);
     stats.bandWidth = narrowband::effectiveBandWidth(params, maxRadius);
 
     bool onGpu = false;
@@ -156,17 +168,18 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
         if (params.device == Device::Cuda && !gpu.usable)
             throw Error("CUDA was requested but there is no usable GPU: " + gpu.reason);
         onGpu = gpu.usable;
-        if (onGpu) clock.done("cuda context");  // waiting for it, unless prepareDevice made it earlier
+        if (onGpu)
+            clock.done("cuda context"); // waiting for it, unless prepareDevice made it earlier
     }
     // The narrow band runs on the device from the sort on; gather-full only gathers there.
     openvdb::FloatTree::Ptr tree;
     if (onGpu && params.method == FieldMethod::NarrowBand && ps.size() > 0) {
         try {
-            tree = field::rasterizeNarrowBandCuda(ps.positions, radii, params, stats.bandWidth, stats,
-                                                  result.isolatedParticles,
+            tree = field::rasterizeNarrowBandCuda(ps.positions, radii, params, stats.bandWidth,
+                                                  stats, result.isolatedParticles,
                                                   [&](const char* name) { clock.done(name); });
         } catch (const ValueError&) {
-            throw;  // the input's fault: the CPU would say the same
+            throw; // the input's fault: the CPU would say the same
         } catch (const Error& e) {
             // CUDA failed (out of device memory, ...): auto means "the GPU if it can", so the CPU
             // takes over and says why; an explicit cuda request reports the failure.
@@ -184,7 +197,8 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
     info.particles = ps.size();
     info.isolated = result.isolatedParticles.size();
     info.source = source;
-    result.grid = levelset::finishLevelSet(tree, params, params.method != FieldMethod::NarrowBand, info);
+    result.grid =
+        levelset::finishLevelSet(tree, params, params.method != FieldMethod::NarrowBand, info);
     stats.activeVoxels = result.grid->activeVoxelCount();
     stats.leaves = result.grid->tree().leafCount();
     clock.done("level set");

@@ -14,7 +14,8 @@ TEST(FramePattern, Spellings)
     EXPECT_EQ(FramePattern("f_%03d.xyz").frame(5), "f_005.xyz");
     EXPECT_EQ(FramePattern("f_%d.xyz").frame(12345), "f_12345.xyz");
     EXPECT_FALSE(FramePattern("plain.bgeo").isSequence());
-    EXPECT_FALSE(FramePattern("dir_{:04}/plain.bgeo").isSequence()) << "only the file name holds a pattern";
+    EXPECT_FALSE(FramePattern("dir_{:04}/plain.bgeo").isSequence())
+        << "only the file name holds a pattern";
     EXPECT_THROW(FramePattern("f_{:x}.bgeo"), ValueError);
     EXPECT_THROW(FramePattern("f_%s.bgeo"), ValueError);
 }
@@ -22,7 +23,8 @@ TEST(FramePattern, Spellings)
 TEST(FramePattern, ExistingFramesAndRanges)
 {
     TempDir dir;
-    for (const char* n : {"f_0001.xyz", "f_0003.xyz", "f_0010.xyz", "f_12.xyz", "g_0002.xyz", "f_0004.xyz.bak"})
+    for (const char* n :
+         {"f_0001.xyz", "f_0003.xyz", "f_0010.xyz", "f_12.xyz", "g_0002.xyz", "f_0004.xyz.bak"})
         writeFile(dir.path(n), "");
     EXPECT_EQ(FramePattern(dir.path("f_{:04}.xyz")).existingFrames(), (std::vector<int>{1, 3, 10}));
     EXPECT_EQ(parseFrameRange("3-6"), (std::vector<int>{3, 4, 5, 6}));

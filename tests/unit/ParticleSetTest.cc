@@ -12,7 +12,7 @@ TEST(ParticleSet, RolesNeedTheRightShape)
 {
     ParticleSet ps;
     ps.positions.resize(2);
-    ps.addFloat("v", 1, {1, 2});  // a scalar named v is not a velocity
+    ps.addFloat("v", 1, {1, 2}); // a scalar named v is not a velocity
     ps.addFloat("Vel", 3, std::vector<float>(6, 1.f));
     ps.addInt("Idp", 1, {4, 5});
     ps.addFloat("pscale", 1, {0.1f, 0.2f});

@@ -29,14 +29,16 @@ TEST(SpacingEstimate, MatchesBruteForceOnRandomPoints)
     std::mt19937 rng(7);
     std::uniform_real_distribution<float> u(0.f, 1.f);
     ParticleSet ps;
-    for (int i = 0; i < 3000; ++i) ps.positions.emplace_back(u(rng), u(rng) * 0.3f, u(rng) * 5.f);
+    for (int i = 0; i < 3000; ++i)
+        ps.positions.emplace_back(u(rng), u(rng) * 0.3f, u(rng) * 5.f);
     std::vector<double> nn;
     for (size_t i = 0; i < ps.size(); ++i) {
         double best = INFINITY;
         for (size_t j = 0; j < ps.size(); ++j) {
             if (i == j) continue;
             const Vec3f d = ps.positions[j] - ps.positions[i];
-            best = std::min(best, std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z));
+            best = std::min(best,
+                            std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z));
         }
         nn.push_back(best);
     }

@@ -26,8 +26,8 @@ int runReadBench(const ReadBenchOptions& options);
 struct FieldBenchOptions
 {
     std::string scenes = "real,drop-1M,block-1M";
-    std::string voxels = "1";    ///< in r
-    std::string supports = "4";  ///< R in r
+    std::string voxels = "1";   ///< in r
+    std::string supports = "4"; ///< R in r
     std::string methods = "narrow-band,narrow-band-1,gather-full,scatter,p2ls,smooth";
     int repeat = 3;
     std::string shared = "../shared/data";
@@ -38,10 +38,10 @@ int runFieldBench(const FieldBenchOptions& options);
 struct MeshBenchOptions
 {
     std::string scenes = "real,drop-1M,block-1M";
-    std::string voxels = "1";  ///< in r (R = 4r)
+    std::string voxels = "1"; ///< in r (R = 4r)
     int repeat = 3;
     std::string shared = "../shared/data";
-    std::string dir = "/tmp";  ///< where the whole-pipeline rows write their OBJ
+    std::string dir = "/tmp"; ///< where the whole-pipeline rows write their OBJ
 };
 
 int runMeshBench(const MeshBenchOptions& options);
@@ -52,22 +52,23 @@ struct Case
     std::string name;
     ParticleSet particles;
     double radius;
-    std::string path;  ///< empty for generated scenes
+    std::string path; ///< empty for generated scenes
 };
 
 /// "real" (the small real frames), "hilbert", or generated "drop-1M", "block-4M", ...
 std::vector<Case> loadCases(const std::string& scenes, const std::string& shared);
 std::vector<std::string> split(const std::string& commaSeparated);
-void resetPeakRss();  ///< restart VmHWM (/proc/self/clear_refs)
+void resetPeakRss(); ///< restart VmHWM (/proc/self/clear_refs)
 
 inline double median(std::vector<double> v)
 {
     std::sort(v.begin(), v.end());
-    return v.empty() ? 0 : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
+    return v.empty()
+               ? 0
+               : (v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]));
 }
 
-template <typename F>
-double seconds(F&& f)
+template <typename F> double seconds(F&& f)
 {
     const auto t0 = std::chrono::steady_clock::now();
     f();

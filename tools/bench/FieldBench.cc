@@ -37,14 +37,18 @@ std::vector<Case> loadCases(const std::string& scenes, const std::string& shared
     std::vector<Case> cases;
     for (const std::string& name : split(scenes)) {
         if (name == "real") {
-            const char* files[] = {"double_dam_break_frame_26_4732_particles.vtk", "dam_break_frame_9_6859_particles.bgeo",
-                                   "dam_break_frame_23_24389_particles.bgeo", "hilbert_46843_particles.bgeo",
-                                   "bunny_frame_14_7705_particles.vtk", "cube_2366_particles.vtk"};
+            const char* files[] = {"double_dam_break_frame_26_4732_particles.vtk",
+                                   "dam_break_frame_9_6859_particles.bgeo",
+                                   "dam_break_frame_23_24389_particles.bgeo",
+                                   "hilbert_46843_particles.bgeo",
+                                   "bunny_frame_14_7705_particles.vtk",
+                                   "cube_2366_particles.vtk"};
             for (const char* f : files) {
                 const std::string path = shared + "/real/" + f;
                 std::ifstream probe(path);
                 if (!probe) continue;
-                cases.push_back({std::string(f).substr(0, std::string(f).find("_particles")), io::readParticles(path), 0.025, path});
+                cases.push_back({std::string(f).substr(0, std::string(f).find("_particles")),
+                                 io::readParticles(path), 0.025, path});
             }
             continue;
         }
@@ -57,7 +61,9 @@ std::vector<Case> loadCases(const std::string& scenes, const std::string& shared
         const size_t dash = name.find('-');
         if (dash == std::string::npos) throw std::runtime_error("unknown scene '" + name + "'");
         SceneParams sp;
-        sp.count = size_t(std::stod(name.substr(dash + 1)) * (name.back() == 'M' ? 1e6 : name.back() == 'k' ? 1e3 : 1));
+        sp.count = size_t(std::stod(name.substr(dash + 1)) * (name.back() == 'M'   ? 1e6
+                                                              : name.back() == 'k' ? 1e3
+                                                                                   : 1));
         cases.push_back({name, generateScene(sceneFromName(name.substr(0, dash)), sp), sp.radius});
     }
     return cases;
@@ -73,9 +79,10 @@ struct Row
     double median = 0, peak = 0, evalRate = 0;
     size_t evaluations = 0, activeVoxels = 0;
     std::map<std::string, double> stages;
-    std::string gpu;  ///< with CUDA: the GPU's own timings (median of the runs), for a note line
-    double gpuFieldMs = 0;  ///< with the device pipeline: its sort through gather (CUDA events)
-    /// The field computation, sort through gather: the CPU stages that the device pipeline replaces.
+    std::string gpu; ///< with CUDA: the GPU's own timings (median of the runs), for a note line
+    double gpuFieldMs = 0; ///< with the device pipeline: its sort through gather (CUDA events)
+    /// The field computation, sort through gather: the CPU stages that the device pipeline
+    /// replaces.
     double cpuFieldSeconds() const
     {
         double t = 0;
@@ -90,13 +97,14 @@ struct Row
 /// The device pipeline's stages from the sort through the gather (not upload, bounds, download).
 bool isDeviceFieldStage(const std::string& name)
 {
-    return name == "sort" || name == "cells" || name == "classify" || name == "band" || name == "isolated" ||
-           name == "gather";
+    return name == "sort" || name == "cells" || name == "classify" || name == "band" ||
+           name == "isolated" || name == "gather";
 }
 
 Row runOurs(const Case& c, const Params& p, int threads, int repeat, const std::string& label)
 {
-    Row row{c.name, label, c.particles.size(), p.voxelSize / c.radius, p.influenceRadius / c.radius, threads};
+    Row row{c.name, label, c.particles.size(), p.voxelSize / c.radius, p.influenceRadius / c.radius,
+            threads};
     std::vector<double> totals;
     std::map<std::string, std::vector<double>> stages;
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
@@ -108,7 +116,8 @@ Row runOurs(const Case& c, const Params& p, int threads, int repeat, const std::
     for (int k = 0; k < repeat; ++k) {
         const RasterizeResult r = rasterizeParticles(c.particles, p);
         totals.push_back(r.stats.totalSeconds());
-        for (const StageTime& s : r.stats.stages) stages[s.name].push_back(s.seconds);
+        for (const StageTime& s : r.stats.stages)
+            stages[s.name].push_back(s.seconds);
         for (const StageTime& s : r.stats.gpuStages) {
             if (!gpu.count(s.name)) gpuOrder.push_back(s.name);
             gpu[s.name].push_back(s.seconds);
@@ -131,7 +140,8 @@ Row runOurs(const Case& c, const Params& p, int threads, int repeat, const std::
     }
     row.peak = peakRssMiB();
     row.median = median(totals);
-    for (auto& [name, v] : stages) row.stages[name] = median(v);
+    for (auto& [name, v] : stages)
+        row.stages[name] = median(v);
     row.evalRate = row.evaluations / row.median * 1e-6;
     return row;
 }
@@ -139,17 +149,20 @@ Row runOurs(const Case& c, const Params& p, int threads, int repeat, const std::
 void printRow(const Row& r, double reference)
 {
     std::string stages;
-    for (const char* s : {"neighbors", "classify", "narrow band", "bounding volume", "field", "cuda context", "upload", "device field",
-                          "vdb build", "complete band", "level set"}) {
+    for (const char* s :
+         {"neighbors", "classify", "narrow band", "bounding volume", "field", "cuda context",
+          "upload", "device field", "vdb build", "complete band", "level set"}) {
         auto it = r.stages.find(s);
         if (it == r.stages.end()) continue;
         char buf[64];
         std::snprintf(buf, sizeof(buf), "%s%.3f", stages.empty() ? "" : " / ", it->second);
         stages += buf;
     }
-    std::printf("| %s | %zu | %g r | %g r | %s | %d | %.3f | %s | %zu | %.1f | %zu | %.0f | %.2fx |\n", r.scene.c_str(),
-                r.particles, r.voxel, r.support, r.method.c_str(), r.threads, r.median, stages.c_str(), r.evaluations,
-                r.evalRate, r.activeVoxels, r.peak, reference > 0 ? r.median / reference : 1.0);
+    std::printf(
+        "| %s | %zu | %g r | %g r | %s | %d | %.3f | %s | %zu | %.1f | %zu | %.0f | %.2fx |\n",
+        r.scene.c_str(), r.particles, r.voxel, r.support, r.method.c_str(), r.threads, r.median,
+        stages.c_str(), r.evaluations, r.evalRate, r.activeVoxels, r.peak,
+        reference > 0 ? r.median / reference : 1.0);
     std::fflush(stdout);
 }
 } // namespace
@@ -157,11 +170,17 @@ void printRow(const Row& r, double reference)
 int runFieldBench(const FieldBenchOptions& o)
 {
     const int hw = int(tbb::info::default_concurrency());
-    std::printf("fluidsurf_bench field: %d hardware threads; seconds are medians of %d runs; stages: %s\n\n", hw, o.repeat,
-                "CPU: neighbors / classify / narrow band (or bounding volume) / field / complete band / level set; "
-                "CUDA: cuda context / upload / device field / vdb build / complete band / level set");
-    std::printf("| scene | particles | voxel | R | method | threads | field stage s | stages s | evaluations | M evals/s "
-                "| active voxels | peak RSS MiB | time / narrow band |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "fluidsurf_bench field: %d hardware threads; seconds are medians of %d runs; stages: "
+        "%s\n\n",
+        hw, o.repeat,
+        "CPU: neighbors / classify / narrow band (or bounding volume) / field / complete band / "
+        "level set; "
+        "CUDA: cuda context / upload / device field / vdb build / complete band / level set");
+    std::printf("| scene | particles | voxel | R | method | threads | field stage s | stages s | "
+                "evaluations | M evals/s "
+                "| active voxels | peak RSS MiB | time / narrow band "
+                "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     const std::vector<std::string> methods = split(o.methods);
     std::vector<std::string> gpuNotes;
     for (const Case& c : loadCases(o.scenes, o.shared))
@@ -181,15 +200,19 @@ int runFieldBench(const FieldBenchOptions& o)
                         std::string note = r.gpu;
                         if (r.gpuFieldMs > 0) {
                             char buf[200];
-                            std::snprintf(buf, sizeof(buf), "; field computation (sort to gather) %.2f ms", r.gpuFieldMs);
+                            std::snprintf(buf, sizeof(buf),
+                                          "; field computation (sort to gather) %.2f ms",
+                                          r.gpuFieldMs);
                             note += buf;
                             if (cpuField > 0) {
-                                std::snprintf(buf, sizeof(buf), " = %.1fx faster than %d threads (%.1f ms)",
+                                std::snprintf(buf, sizeof(buf),
+                                              " = %.1fx faster than %d threads (%.1f ms)",
                                               cpuField * 1e3 / r.gpuFieldMs, hw, cpuField * 1e3);
                                 note += buf;
                             }
                             if (cpuField1 > 0) {
-                                std::snprintf(buf, sizeof(buf), ", %.0fx faster than 1 thread (%.0f ms)",
+                                std::snprintf(buf, sizeof(buf),
+                                              ", %.0fx faster than 1 thread (%.0f ms)",
                                               cpuField1 * 1e3 / r.gpuFieldMs, cpuField1 * 1e3);
                                 note += buf;
                             }
@@ -197,26 +220,39 @@ int runFieldBench(const FieldBenchOptions& o)
                         gpuNotes.push_back(note);
                     } else if (m == "narrow-band" || m == "narrow-band-1") {
                         p.method = FieldMethod::NarrowBand;
-                        const Row r = runOurs(c, p, m == "narrow-band" ? hw : 1, o.repeat, "narrow band");
-                        if (m == "narrow-band") reference = r.median, cpuField = r.cpuFieldSeconds();
-                        else cpuField1 = r.cpuFieldSeconds();
+                        const Row r =
+                            runOurs(c, p, m == "narrow-band" ? hw : 1, o.repeat, "narrow band");
+                        if (m == "narrow-band")
+                            reference = r.median, cpuField = r.cpuFieldSeconds();
+                        else
+                            cpuField1 = r.cpuFieldSeconds();
                         printRow(r, reference);
                     } else if (m == "gather-full" || m == "scatter") {
                         p.method = methodFromName(m);
-                        printRow(runOurs(c, p, m == "scatter" ? 1 : hw, std::max(1, o.repeat / 2), m), reference);
+                        printRow(
+                            runOurs(c, p, m == "scatter" ? 1 : hw, std::max(1, o.repeat / 2), m),
+                            reference);
                     } else if (m == "p2ls" || m == "smooth") {
                         std::vector<double> t, setup;
                         BaselineResult b;
                         resetPeakRss();
                         for (int k = 0; k < std::max(1, o.repeat / 2); ++k) {
-                            b = m == "p2ls" ? runParticlesToLevelSet(c.particles, c.radius, p.voxelSize)
-                                            : runSmoothSpheres(c.particles, c.radius, p.influenceRadius, p.voxelSize);
+                            b = m == "p2ls"
+                                    ? runParticlesToLevelSet(c.particles, c.radius, p.voxelSize)
+                                    : runSmoothSpheres(c.particles, c.radius, p.influenceRadius,
+                                                       p.voxelSize);
                             t.push_back(b.seconds), setup.push_back(b.setupSeconds);
                         }
-                        Row r{c.name, m == "p2ls" ? "OpenVDB ParticlesToLevelSet" : "OpenVDB rasterizeSmoothSpheres",
-                              c.particles.size(), p.voxelSize / c.radius, p.influenceRadius / c.radius, hw};
+                        Row r{c.name,
+                              m == "p2ls" ? "OpenVDB ParticlesToLevelSet"
+                                          : "OpenVDB rasterizeSmoothSpheres",
+                              c.particles.size(),
+                              p.voxelSize / c.radius,
+                              p.influenceRadius / c.radius,
+                              hw};
                         r.median = median(t);
-                        if (m == "smooth") r.stages["neighbors"] = median(setup);  // PointDataGrid build
+                        if (m == "smooth")
+                            r.stages["neighbors"] = median(setup); // PointDataGrid build
                         r.activeVoxels = b.activeVoxels;
                         r.peak = peakRssMiB();
                         printRow(r, reference);
@@ -226,9 +262,12 @@ int runFieldBench(const FieldBenchOptions& o)
                 }
             }
     if (!gpuNotes.empty()) {
-        std::printf("\nGPU timings (CUDA events, medians of the runs; the field computation is sort through gather,\n"
-                    "compared with the CPU's neighbors + classify + narrow band + field in the same run):\n\n");
-        for (const std::string& n : gpuNotes) std::printf("- %s\n", n.c_str());
+        std::printf("\nGPU timings (CUDA events, medians of the runs; the field computation is "
+                    "sort through gather,\n"
+                    "compared with the CPU's neighbors + classify + narrow band + field in the "
+                    "same run):\n\n");
+        for (const std::string& n : gpuNotes)
+            std::printf("- %s\n", n.c_str());
     }
     return 0;
 }

@@ -18,9 +18,13 @@ namespace bench {
 int runMeshBench(const MeshBenchOptions& o)
 {
     const int hw = tbb::info::default_concurrency();
-    std::printf("fluidsurf_bench mesh: %d hardware threads; seconds are medians of %d runs; R = 4r\n\n", hw, o.repeat);
-    std::printf("| scene | particles | voxel | field stage s | mesher | mesh s | mesh / field | triangles | M triangles/s "
-                "| peak RSS MiB | volumeToMesh / ours |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "fluidsurf_bench mesh: %d hardware threads; seconds are medians of %d runs; R = 4r\n\n", hw,
+        o.repeat);
+    std::printf(
+        "| scene | particles | voxel | field stage s | mesher | mesh s | mesh / field | triangles "
+        "| M triangles/s "
+        "| peak RSS MiB | volumeToMesh / ours |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
     std::vector<std::string> pipeline;
     for (const Case& c : loadCases(o.scenes, o.shared))
         for (const std::string& v : split(o.voxels)) {
@@ -44,11 +48,14 @@ int runMeshBench(const MeshBenchOptions& o)
                 }
                 const double s = median(t);
                 if (m == Mesher::MarchingCubes) ours = s;
-                std::printf("| %s | %zu | %s r | %.3f | %s | %.4f | %.1f%% | %zu | %.1f | %.0f | %s |\n", c.name.c_str(),
-                            c.particles.size(), v.c_str(), fieldSeconds,
-                            m == Mesher::MarchingCubes ? "ours (mc)" : "OpenVDB volumeToMesh", s, 100 * s / fieldSeconds,
-                            ms.triangles, ms.triangles / s * 1e-6, peakRssMiB(),
-                            m == Mesher::MarchingCubes ? "" : (std::to_string(s / ours).substr(0, 4) + "x").c_str());
+                std::printf(
+                    "| %s | %zu | %s r | %.3f | %s | %.4f | %.1f%% | %zu | %.1f | %.0f | %s |\n",
+                    c.name.c_str(), c.particles.size(), v.c_str(), fieldSeconds,
+                    m == Mesher::MarchingCubes ? "ours (mc)" : "OpenVDB volumeToMesh", s,
+                    100 * s / fieldSeconds, ms.triangles, ms.triangles / s * 1e-6, peakRssMiB(),
+                    m == Mesher::MarchingCubes
+                        ? ""
+                        : (std::to_string(s / ours).substr(0, 4) + "x").c_str());
                 std::fflush(stdout);
             }
             // Whole pipeline, as `fluidsurf reconstruct` runs it (without process start-up).
@@ -58,23 +65,30 @@ int runMeshBench(const MeshBenchOptions& o)
                 double r = 0;
                 ParticleSet loaded;
                 if (!c.path.empty()) r = seconds([&] { loaded = io::readParticles(c.path); });
-                const RasterizeResult rr = rasterizeParticles(c.path.empty() ? c.particles : loaded, p);
+                const RasterizeResult rr =
+                    rasterizeParticles(c.path.empty() ? c.particles : loaded, p);
                 MeshStats ms;
                 const TriangleMesh mesh = meshLevelSet(*rr.grid, Mesher::MarchingCubes, &ms);
                 const double w = seconds([&] { io::writeMesh(mesh, out); });
-                read.push_back(r), write.push_back(w), total.push_back(r + rr.stats.totalSeconds() + ms.seconds + w);
+                read.push_back(r), write.push_back(w),
+                    total.push_back(r + rr.stats.totalSeconds() + ms.seconds + w);
             }
             std::remove(out.c_str());
             char line[512];
-            std::snprintf(line, sizeof(line), "| %s | %s r | %s | %.3f | %.3f | %.4f | %.3f | %.0f |", c.name.c_str(), v.c_str(),
-                          c.path.empty() ? "-" : std::to_string(median(read)).substr(0, 6).c_str(), fieldSeconds, ours,
-                          median(write), median(total), peakRssMiB());
+            std::snprintf(line, sizeof(line),
+                          "| %s | %s r | %s | %.3f | %.3f | %.4f | %.3f | %.0f |", c.name.c_str(),
+                          v.c_str(),
+                          c.path.empty() ? "-" : std::to_string(median(read)).substr(0, 6).c_str(),
+                          fieldSeconds, ours, median(write), median(total), peakRssMiB());
             pipeline.push_back(line);
         }
-    std::printf("\nWhole pipeline (read, field, our mesher, write OBJ with normals; no process start-up):\n\n"
-                "| scene | voxel | read s | field s | mesh s | write OBJ s | total s | peak RSS MiB |\n"
-                "|---|---|---|---|---|---|---|---|\n");
-    for (const std::string& l : pipeline) std::printf("%s\n", l.c_str());
+    std::printf(
+        "\nWhole pipeline (read, field, our mesher, write OBJ with normals; no process "
+        "start-up):\n\n"
+        "| scene | voxel | read s | field s | mesh s | write OBJ s | total s | peak RSS MiB |\n"
+        "|---|---|---|---|---|---|---|---|\n");
+    for (const std::string& l : pipeline)
+        std::printf("%s\n", l.c_str());
     return 0;
 }
 

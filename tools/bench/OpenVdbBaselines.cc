@@ -19,7 +19,10 @@ struct ParticleList
     const ParticleSet& ps;
     double radius;
     size_t size() const { return ps.size(); }
-    void getPos(size_t i, openvdb::Vec3R& p) const { p = openvdb::Vec3R(ps.positions[i].x, ps.positions[i].y, ps.positions[i].z); }
+    void getPos(size_t i, openvdb::Vec3R& p) const
+    {
+        p = openvdb::Vec3R(ps.positions[i].x, ps.positions[i].y, ps.positions[i].z);
+    }
     void getPosRad(size_t i, openvdb::Vec3R& p, openvdb::Real& r) const
     {
         getPos(i, p);
@@ -36,7 +39,7 @@ BaselineResult runParticlesToLevelSet(const ParticleSet& ps, double radius, doub
     out.seconds = seconds([&] {
         grid = openvdb::createLevelSet<openvdb::FloatGrid>(voxel, 3.0);
         openvdb::tools::ParticlesToLevelSet<openvdb::FloatGrid> raster(*grid);
-        raster.setRmin(0);  // our particles are ~1 voxel; the default 1.5 would skip them all
+        raster.setRmin(0); // our particles are ~1 voxel; the default 1.5 would skip them all
         raster.rasterizeSpheres(ParticleList{ps, radius});
         raster.finalize(true);
     });
@@ -44,22 +47,27 @@ BaselineResult runParticlesToLevelSet(const ParticleSet& ps, double radius, doub
     return out;
 }
 
-BaselineResult runSmoothSpheres(const ParticleSet& ps, double radius, double searchRadius, double voxel)
+BaselineResult runSmoothSpheres(const ParticleSet& ps, double radius, double searchRadius,
+                                double voxel)
 {
     openvdb::initialize();
     BaselineResult out;
     openvdb::points::PointDataGrid::Ptr points;
     out.setupSeconds = seconds([&] {
         std::vector<openvdb::Vec3f> pos(ps.size());
-        for (size_t i = 0; i < ps.size(); ++i) pos[i] = openvdb::Vec3f(ps.positions[i].x, ps.positions[i].y, ps.positions[i].z);
+        for (size_t i = 0; i < ps.size(); ++i)
+            pos[i] = openvdb::Vec3f(ps.positions[i].x, ps.positions[i].y, ps.positions[i].z);
         // About 8 points per voxel of the point grid (its voxel size is independent of the SDF's).
         auto xform = openvdb::math::Transform::createLinearTransform(4 * radius);
-        points = openvdb::points::createPointDataGrid<openvdb::points::NullCodec, openvdb::points::PointDataGrid>(pos, *xform);
+        points = openvdb::points::createPointDataGrid<openvdb::points::NullCodec,
+                                                      openvdb::points::PointDataGrid>(pos, *xform);
     });
     openvdb::FloatGrid::Ptr sdf;
     out.seconds = seconds([&] {
-        sdf = openvdb::points::rasterizeSmoothSpheres<openvdb::points::PointDataGrid, openvdb::FloatGrid>(
-            *points, radius, searchRadius, 3.0, openvdb::math::Transform::createLinearTransform(voxel));
+        sdf = openvdb::points::rasterizeSmoothSpheres<openvdb::points::PointDataGrid,
+                                                      openvdb::FloatGrid>(
+            *points, radius, searchRadius, 3.0,
+            openvdb::math::Transform::createLinearTransform(voxel));
     });
     out.activeVoxels = sdf->activeVoxelCount();
     return out;

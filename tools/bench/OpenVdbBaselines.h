@@ -12,13 +12,14 @@ namespace bench {
 
 struct BaselineResult
 {
-    double seconds = 0;       ///< the rasterization itself
-    double setupSeconds = 0;  ///< building the PointDataGrid (smooth spheres only)
+    double seconds = 0;      ///< the rasterization itself
+    double setupSeconds = 0; ///< building the PointDataGrid (smooth spheres only)
     size_t activeVoxels = 0;
 };
 
 BaselineResult runParticlesToLevelSet(const ParticleSet& ps, double radius, double voxel);
-BaselineResult runSmoothSpheres(const ParticleSet& ps, double radius, double searchRadius, double voxel);
+BaselineResult runSmoothSpheres(const ParticleSet& ps, double radius, double searchRadius,
+                                double voxel);
 
 } // namespace bench
 } // namespace fluidsurf

@@ -26,7 +26,7 @@ Row timeRead(const std::string& name, const std::string& path, int repeat)
 {
     Row row{name, path};
     std::vector<double> t;
-    io::readParticles(path);  // untimed warm-up: page cache and first-touch allocations
+    io::readParticles(path); // untimed warm-up: page cache and first-touch allocations
     for (int k = 0; k < repeat; ++k) {
         ParticleSet ps;
         t.push_back(seconds([&] { ps = io::readParticles(path); }));
@@ -47,8 +47,12 @@ int runReadBench(const ReadBenchOptions& o)
     ParticleSet ps = generateScene(Scene::Drop, sp);
     ps.attributes.clear();
     const std::string base = o.dir + "/fluidsurf_bench_" + std::to_string(::getpid());
-    struct Case { const char* name; const char* ext; };
-    const Case cases[] = {{"VTK legacy binary", ".vtk"},   {"PLY binary LE", ".ply"},
+    struct Case
+    {
+        const char* name;
+        const char* ext;
+    };
+    const Case cases[] = {{"VTK legacy binary", ".vtk"},     {"PLY binary LE", ".ply"},
                           {"BGEO v5 uncompressed", ".bgeo"}, {"xyz (raw float32)", ".xyz"},
                           {"BGEO v5 gzip", ".bgeo.gz"},      {"VDB points (Blosc)", ".vdb"}};
     std::vector<Row> rows;
@@ -68,18 +72,23 @@ int runReadBench(const ReadBenchOptions& o)
         }
     }
     if (o.json) {
-        std::printf("{\"benchmark\": \"io\", \"generated_particles\": %zu, \"repeat\": %d, \"rows\": [\n", ps.size(), o.repeat);
+        std::printf(
+            "{\"benchmark\": \"io\", \"generated_particles\": %zu, \"repeat\": %d, \"rows\": [\n",
+            ps.size(), o.repeat);
         for (size_t i = 0; i < rows.size(); ++i)
-            std::printf("  {\"case\": \"%s\", \"particles\": %zu, \"bytes\": %.0f, \"median_s\": %.6f, \"MBps\": %.1f}%s\n",
+            std::printf("  {\"case\": \"%s\", \"particles\": %zu, \"bytes\": %.0f, \"median_s\": "
+                        "%.6f, \"MBps\": %.1f}%s\n",
                         rows[i].name.c_str(), rows[i].particles, rows[i].bytes, rows[i].secs,
                         rows[i].bytes / rows[i].secs / 1e6, i + 1 < rows.size() ? "," : "");
         std::printf("], \"peak_rss_MiB\": %.1f}\n", peakRssMiB());
         return 0;
     }
-    std::printf("| case | particles | file MB | median read s | MB/s | Mparticles/s |\n|---|---:|---:|---:|---:|---:|\n");
+    std::printf("| case | particles | file MB | median read s | MB/s | Mparticles/s "
+                "|\n|---|---:|---:|---:|---:|---:|\n");
     for (const Row& r : rows)
-        std::printf("| %s | %zu | %.1f | %.4f | %.0f | %.1f |\n", r.name.c_str(), r.particles, r.bytes / 1e6, r.secs,
-                    r.bytes / r.secs / 1e6, double(r.particles) / r.secs / 1e6);
+        std::printf("| %s | %zu | %.1f | %.4f | %.0f | %.1f |\n", r.name.c_str(), r.particles,
+                    r.bytes / 1e6, r.secs, r.bytes / r.secs / 1e6,
+                    double(r.particles) / r.secs / 1e6);
     std::printf("\nmedian of %d reads each; peak RSS %.0f MiB\n", o.repeat, peakRssMiB());
     return 0;
 }

@@ -14,31 +14,53 @@ int main(int argc, char** argv)
     CLI::App app{"fluidsurf_bench - speed and memory of the fluidsurf stages"};
     app.require_subcommand(1);
     fluidsurf::bench::ReadBenchOptions io;
-    CLI::App* ioCmd = app.add_subcommand("io", "particle read throughput per format on a generated frame");
-    ioCmd->add_option("--count", io.count, "particles in the generated frame")->capture_default_str();
-    ioCmd->add_option("--repeat", io.repeat, "reads per format (median reported)")->capture_default_str();
+    CLI::App* ioCmd =
+        app.add_subcommand("io", "particle read throughput per format on a generated frame");
+    ioCmd->add_option("--count", io.count, "particles in the generated frame")
+        ->capture_default_str();
+    ioCmd->add_option("--repeat", io.repeat, "reads per format (median reported)")
+        ->capture_default_str();
     ioCmd->add_option("--dir", io.dir, "folder for the temporary files")->capture_default_str();
-    ioCmd->add_option("--shared", io.shared, "../shared/data to also time the real frames ('' to skip)")->capture_default_str();
+    ioCmd
+        ->add_option("--shared", io.shared,
+                     "../shared/data to also time the real frames ('' to skip)")
+        ->capture_default_str();
     ioCmd->add_flag("--json", io.json, "JSON instead of a Markdown table");
     fluidsurf::bench::FieldBenchOptions field;
-    CLI::App* fieldCmd = app.add_subcommand("field", "rasterize per stage: narrow band vs baselines vs OpenVDB");
-    fieldCmd->add_option("--scenes", field.scenes, "real, hilbert, drop-1M, block-4M, ... (comma-separated)")->capture_default_str();
-    fieldCmd->add_option("--voxel", field.voxels, "voxel sizes in r (comma-separated)")->capture_default_str();
-    fieldCmd->add_option("--support", field.supports, "influence radii R in r (comma-separated)")->capture_default_str();
-    fieldCmd->add_option("--methods", field.methods, "narrow-band, narrow-band-1 (one thread), narrow-band-cuda, "
-                                                     "gather-full, scatter, p2ls, smooth")->capture_default_str();
+    CLI::App* fieldCmd =
+        app.add_subcommand("field", "rasterize per stage: narrow band vs baselines vs OpenVDB");
+    fieldCmd
+        ->add_option("--scenes", field.scenes,
+                     "real, hilbert, drop-1M, block-4M, ... (comma-separated)")
+        ->capture_default_str();
+    fieldCmd->add_option("--voxel", field.voxels, "voxel sizes in r (comma-separated)")
+        ->capture_default_str();
+    fieldCmd->add_option("--support", field.supports, "influence radii R in r (comma-separated)")
+        ->capture_default_str();
+    fieldCmd
+        ->add_option("--methods", field.methods,
+                     "narrow-band, narrow-band-1 (one thread), narrow-band-cuda, "
+                     "gather-full, scatter, p2ls, smooth")
+        ->capture_default_str();
     fieldCmd->add_option("--repeat", field.repeat, "runs per case (median)")->capture_default_str();
     fieldCmd->add_option("--shared", field.shared, "../shared/data")->capture_default_str();
     fluidsurf::bench::MeshBenchOptions mesh;
-    CLI::App* meshCmd = app.add_subcommand("mesh", "meshing stage: our marching cubes vs volumeToMesh; whole pipeline");
-    meshCmd->add_option("--scenes", mesh.scenes, "real, hilbert, drop-1M, block-4M, ... (comma-separated)")->capture_default_str();
-    meshCmd->add_option("--voxel", mesh.voxels, "voxel sizes in r (comma-separated)")->capture_default_str();
+    CLI::App* meshCmd = app.add_subcommand(
+        "mesh", "meshing stage: our marching cubes vs volumeToMesh; whole pipeline");
+    meshCmd
+        ->add_option("--scenes", mesh.scenes,
+                     "real, hilbert, drop-1M, block-4M, ... (comma-separated)")
+        ->capture_default_str();
+    meshCmd->add_option("--voxel", mesh.voxels, "voxel sizes in r (comma-separated)")
+        ->capture_default_str();
     meshCmd->add_option("--repeat", mesh.repeat, "runs per case (median)")->capture_default_str();
     meshCmd->add_option("--shared", mesh.shared, "../shared/data")->capture_default_str();
-    meshCmd->add_option("--dir", mesh.dir, "folder for the whole-pipeline OBJ")->capture_default_str();
+    meshCmd->add_option("--dir", mesh.dir, "folder for the whole-pipeline OBJ")
+        ->capture_default_str();
     bool coldAllocator = false;
-    app.add_flag("--cold-allocator", coldAllocator,
-                 "keep glibc's default malloc thresholds (big buffers come fresh from mmap each read)");
+    app.add_flag(
+        "--cold-allocator", coldAllocator,
+        "keep glibc's default malloc thresholds (big buffers come fresh from mmap each read)");
     CLI11_PARSE(app, argc, argv);
     if (!coldAllocator) {
         // glibc mmaps large buffers afresh until its adaptive threshold has grown, so the first

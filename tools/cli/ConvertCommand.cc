@@ -23,12 +23,15 @@ struct ConvertOptions
 Runner addConvertCommand(CLI::App& app)
 {
     auto o = std::make_shared<ConvertOptions>();
-    CLI::App* cmd = app.add_subcommand("convert", "Convert particle files between formats (reads .vtk .vtu .vtp .bgeo "
-                                                  ".ply .xyz .csv .txt .npy .vdb; writes .vdb .bgeo .bgeo.gz .ply .xyz .vtk)");
+    CLI::App* cmd = app.add_subcommand(
+        "convert", "Convert particle files between formats (reads .vtk .vtu .vtp .bgeo "
+                   ".ply .xyz .csv .txt .npy .vdb; writes .vdb .bgeo .bgeo.gz .ply .xyz .vtk)");
     cmd->add_option("input", o->input, "input file or frame pattern")->required();
-    cmd->add_option("output", o->output, "output file or frame pattern (format from the extension)")->required();
+    cmd->add_option("output", o->output, "output file or frame pattern (format from the extension)")
+        ->required();
     cmd->add_option("--frames", o->frames, "frame range A-B for a pattern");
-    cmd->add_flag("--drop-nonfinite", o->dropNonFinite, "drop particles with NaN/Inf coordinates instead of failing");
+    cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
+                  "drop particles with NaN/Inf coordinates instead of failing");
     cmd->add_flag("--no-compress", o->noCompress, "write VDB points without Blosc compression");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no per-frame lines");
     cmd->footer("Examples:\n  fluidsurf convert frame.vtk frame.vdb\n"
@@ -49,15 +52,19 @@ Runner addConvertCommand(CLI::App& app)
             io::writeParticles(ps, jobs[i].output, wo);
             total += ps.size();
             if (!o->quiet && !bar.enabled()) {
-                std::printf("%s -> %s: %zu particles", jobs[i].input.c_str(), jobs[i].output.c_str(), ps.size());
-                if (ri.droppedNonFinite) std::printf(" (%zu non-finite dropped)", ri.droppedNonFinite);
+                std::printf("%s -> %s: %zu particles", jobs[i].input.c_str(),
+                            jobs[i].output.c_str(), ps.size());
+                if (ri.droppedNonFinite)
+                    std::printf(" (%zu non-finite dropped)", ri.droppedNonFinite);
                 std::printf("\n");
             }
         }
         bar.finish();
-        const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double secs =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (jobs.size() > 1)
-            std::printf("converted %zu frame(s), %zu particles in %.2f s\n", jobs.size(), total, secs);
+            std::printf("converted %zu frame(s), %zu particles in %.2f s\n", jobs.size(), total,
+                        secs);
         return 0;
     };
 }

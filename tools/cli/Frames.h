@@ -12,7 +12,7 @@ namespace cli {
 struct FrameJob
 {
     std::string input, output;
-    int frame = -1;  ///< -1 for a single file
+    int frame = -1; ///< -1 for a single file
 };
 
 /// Frame jobs for an input (pattern or file) and an optional output pattern. A sequence

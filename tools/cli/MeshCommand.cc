@@ -12,7 +12,6 @@
 #include <fluidsurf/io/MeshIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
-
 #include <chrono>
 #include <cstdio>
 #include <memory>
@@ -23,7 +22,10 @@ namespace cli {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double since(Clock::time_point t)
+{
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 struct MeshOptions
 {
@@ -35,12 +37,18 @@ struct MeshOptions
 
 void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o)
 {
-    cmd->add_option("-o,--output", o.output, "output mesh (.obj, .ply or .vtk) or pattern")->required();
+    cmd->add_option("-o,--output", o.output, "output mesh (.obj, .ply or .vtk) or pattern")
+        ->required();
     cmd->add_option("--frames", o.frames, "frame range A-B for a pattern");
-    cmd->add_option("--mesher", o.mesher, "mc (our marching cubes) or openvdb (OpenVDB's volumeToMesh)")
-        ->capture_default_str()->check(CLI::IsMember({"mc", "openvdb"}));
-    cmd->add_option("-j,--threads", o.threads, "worker threads (default: all cores)")->check(CLI::NonNegativeNumber);
-    cmd->add_flag("--check", o.check, "check the mesh (boundary and non-manifold edges, orientation, ...) and print it");
+    cmd->add_option("--mesher", o.mesher,
+                    "mc (our marching cubes) or openvdb (OpenVDB's volumeToMesh)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"mc", "openvdb"}));
+    cmd->add_option("-j,--threads", o.threads, "worker threads (default: all cores)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_flag(
+        "--check", o.check,
+        "check the mesh (boundary and non-manifold edges, orientation, ...) and print it");
     cmd->add_flag("-q,--quiet", o.quiet, "no progress bar and no per-frame lines");
     cmd->add_flag("-v,--verbose", o.verbose, "per-stage timings and peak memory");
 }
@@ -55,8 +63,8 @@ std::vector<FrameJob> planMeshJobs(const MeshOptions& o)
 }
 
 /// Mesh a grid, write it, and print the frame's line (and the stage lines with -v).
-void meshAndWrite(const MeshOptions& o, const openvdb::FloatGrid& grid, const FrameJob& job, bool bar,
-                  std::vector<StageTime>& stages)
+void meshAndWrite(const MeshOptions& o, const openvdb::FloatGrid& grid, const FrameJob& job,
+                  bool bar, std::vector<StageTime>& stages)
 {
     MeshStats ms;
     const TriangleMesh mesh = meshLevelSet(grid, mesherFromName(o.mesher), &ms);
@@ -66,12 +74,14 @@ void meshAndWrite(const MeshOptions& o, const openvdb::FloatGrid& grid, const Fr
     stages.push_back({"write mesh", since(t)});
     if (!o.quiet && !bar) {
         double total = 0;
-        for (const StageTime& s : stages) total += s.seconds;
-        std::printf("%s -> %s: %zu vertices, %zu triangles, %.3f s\n", job.input.c_str(), job.output.c_str(),
-                    mesh.points.size(), mesh.triangles.size(), total);
+        for (const StageTime& s : stages)
+            total += s.seconds;
+        std::printf("%s -> %s: %zu vertices, %zu triangles, %.3f s\n", job.input.c_str(),
+                    job.output.c_str(), mesh.points.size(), mesh.triangles.size(), total);
     }
     if (o.verbose) {
-        for (const StageTime& s : stages) std::printf("  %-16s %8.4f s\n", s.name.c_str(), s.seconds);
+        for (const StageTime& s : stages)
+            std::printf("  %-16s %8.4f s\n", s.name.c_str(), s.seconds);
         std::printf("  peak memory %.1f MiB\n", peakRssMiB());
     }
     if (o.check) std::printf("  mesh: %s\n", describe(checkMesh(mesh)).c_str());
@@ -84,14 +94,16 @@ Runner addMeshCommand(CLI::App& app)
     auto o = std::make_shared<MeshOptions>();
     CLI::App* cmd = app.add_subcommand("mesh", "Level set(s) (.vdb) to triangle mesh(es)");
     cmd->add_option("input", o->input, ".vdb file or frame pattern")->required();
-    cmd->add_option("--grid", o->grid, "name of the float grid to mesh (default: the first level set)");
+    cmd->add_option("--grid", o->grid,
+                    "name of the float grid to mesh (default: the first level set)");
     addMeshOutputOptions(cmd, *o);
-    cmd->footer("Examples:\n"
-                "  fluidsurf mesh frame.vdb -o frame.obj\n"
-                "  fluidsurf mesh smoke.vdb --grid surface --mesher openvdb -o surface.ply\n"
-                "  fluidsurf mesh 'vdb/f_{:04}.vdb' -o 'obj/f_{:04}.obj' --frames 1-100\n"
-                "Reads any VDB level set (ours or another tool's); meshes its zero crossing with\n"
-                "outward (counter-clockwise) triangles and vertex normals from the field gradient.");
+    cmd->footer(
+        "Examples:\n"
+        "  fluidsurf mesh frame.vdb -o frame.obj\n"
+        "  fluidsurf mesh smoke.vdb --grid surface --mesher openvdb -o surface.ply\n"
+        "  fluidsurf mesh 'vdb/f_{:04}.vdb' -o 'obj/f_{:04}.obj' --frames 1-100\n"
+        "Reads any VDB level set (ours or another tool's); meshes its zero crossing with\n"
+        "outward (counter-clockwise) triangles and vertex normals from the field gradient.");
     return [o]() {
         const auto jobs = planMeshJobs(*o);
         const auto threads = limitThreads(o->threads);
@@ -112,17 +124,20 @@ Runner addMeshCommand(CLI::App& app)
 Runner addReconstructCommand(CLI::App& app)
 {
     auto o = std::make_shared<MeshOptions>();
-    CLI::App* cmd = app.add_subcommand("reconstruct", "Particle frame(s) to triangle mesh(es), level set in memory");
+    CLI::App* cmd = app.add_subcommand(
+        "reconstruct", "Particle frame(s) to triangle mesh(es), level set in memory");
     cmd->add_option("input", o->input, "particle file or frame pattern")->required();
     cmd->add_option("--vdb", o->vdb, "also write the level set to this .vdb file or pattern");
     addFieldOptions(cmd, o->field);
     addMeshOutputOptions(cmd, *o);
-    cmd->add_flag("--drop-nonfinite", o->dropNonFinite, "drop particles with NaN/Inf coordinates instead of failing");
-    cmd->footer("Examples:\n"
-                "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
-                "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj --vdb frame.vdb --check\n"
-                "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'obj/f_{:04}.obj' --frames 1-100\n"
-                "The same field as 'rasterize' (all its options), then marching cubes.");
+    cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
+                  "drop particles with NaN/Inf coordinates instead of failing");
+    cmd->footer(
+        "Examples:\n"
+        "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
+        "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj --vdb frame.vdb --check\n"
+        "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'obj/f_{:04}.obj' --frames 1-100\n"
+        "The same field as 'rasterize' (all its options), then marching cubes.");
     return [o]() {
         auto jobs = planMeshJobs(*o);
         std::vector<FrameJob> vdbJobs;
@@ -140,17 +155,20 @@ Runner addReconstructCommand(CLI::App& app)
             io::ReadInfo ri;
             const ParticleSet ps = io::readParticles(jobs[i].input, ro, &ri);
             stages.push_back({"read", since(t)});
-            if (i == 0) radius = chooseRadius(o->field, ps, !o->quiet);  // one r for the sequence
-            const RasterizeResult res = rasterizeParticles(ps, makeParams(o->field, radius), jobs[i].input);
-            for (const StageTime& s : res.stats.stages) stages.push_back(s);
+            if (i == 0) radius = chooseRadius(o->field, ps, !o->quiet); // one r for the sequence
+            const RasterizeResult res =
+                rasterizeParticles(ps, makeParams(o->field, radius), jobs[i].input);
+            for (const StageTime& s : res.stats.stages)
+                stages.push_back(s);
             if (!vdbJobs.empty()) {
                 t = Clock::now();
                 writeLevelSet({res.grid}, vdbJobs[i].output);
                 stages.push_back({"write vdb", since(t)});
             }
             if (!o->quiet && !bar.enabled() && (res.stats.isolated || ri.droppedNonFinite))
-                std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n", jobs[i].input.c_str(),
-                            res.stats.isolated, o->field.keepIsolated ? "kept as spheres" : "left out",
+                std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",
+                            jobs[i].input.c_str(), res.stats.isolated,
+                            o->field.keepIsolated ? "kept as spheres" : "left out",
                             ri.droppedNonFinite);
             meshAndWrite(*o, *res.grid, jobs[i], bar.enabled(), stages);
             if (o->verbose) printDevice(res.stats);

@@ -13,18 +13,22 @@ Progress::Progress(size_t total, std::string label, bool quiet)
 {
 }
 
-Progress::~Progress() { finish(); }
+Progress::~Progress()
+{
+    finish();
+}
 
 void Progress::update(size_t done, const std::string& item)
 {
     if (!mEnabled) return;
     const int width = 30;
     const int filled = mTotal ? int(width * done / mTotal) : width;
-    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - mStart).count();
+    const double secs =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - mStart).count();
     const double eta = done ? secs / double(done) * double(mTotal - done) : 0;
-    std::fprintf(stderr, "\r%s [%.*s%*s] %zu/%zu  %.1fs elapsed, ~%.0fs left  %.40s\033[K", mLabel.c_str(),
-                 filled, "##############################", width - filled, "", done, mTotal, secs, eta,
-                 item.c_str());
+    std::fprintf(stderr, "\r%s [%.*s%*s] %zu/%zu  %.1fs elapsed, ~%.0fs left  %.40s\033[K",
+                 mLabel.c_str(), filled, "##############################", width - filled, "", done,
+                 mTotal, secs, eta, item.c_str());
     std::fflush(stderr);
 }
 

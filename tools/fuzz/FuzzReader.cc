@@ -16,8 +16,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     options.allowEmpty = true;
     options.dropNonFinite = true;
     try {
-        fluidsurf::io::readParticlesFromMemory(data, size, fluidsurf::io::ParticleFormat::FUZZ_FORMAT, "fuzz",
-                                               options);
+        fluidsurf::io::readParticlesFromMemory(
+            data, size, fluidsurf::io::ParticleFormat::FUZZ_FORMAT, "fuzz", options);
     } catch (const fluidsurf::InputError&) {
     }
     return 0;

@@ -13,7 +13,7 @@ namespace fluidsurf {
 struct TriangleMesh
 {
     std::vector<Vec3f> points;
-    std::vector<Vec3f> normals;                  ///< empty, or one per point
+    std::vector<Vec3f> normals; ///< empty, or one per point
     std::vector<std::array<uint32_t, 3>> triangles;
 
     bool empty() const { return triangles.empty(); }

@@ -12,21 +12,21 @@ namespace fluidsurf {
 struct MeshReport
 {
     size_t vertices = 0, triangles = 0;
-    size_t unusedVertices = 0;       ///< vertices no triangle references
-    size_t boundaryEdges = 0;        ///< edges of exactly one triangle
-    size_t nonManifoldEdges = 0;     ///< edges of three or more triangles
-    size_t nonManifoldVertices = 0;  ///< vertices whose triangles form more than one fan
-    size_t misorientedEdges = 0;     ///< two-triangle edges walked in the same direction by both
-    size_t degenerateTriangles = 0;  ///< repeated vertex index or zero area
-    size_t components = 0;           ///< connected components (through shared vertices)
-    double volume = 0;               ///< enclosed volume (signed: > 0 when oriented outward)
+    size_t unusedVertices = 0;      ///< vertices no triangle references
+    size_t boundaryEdges = 0;       ///< edges of exactly one triangle
+    size_t nonManifoldEdges = 0;    ///< edges of three or more triangles
+    size_t nonManifoldVertices = 0; ///< vertices whose triangles form more than one fan
+    size_t misorientedEdges = 0;    ///< two-triangle edges walked in the same direction by both
+    size_t degenerateTriangles = 0; ///< repeated vertex index or zero area
+    size_t components = 0;          ///< connected components (through shared vertices)
+    double volume = 0;              ///< enclosed volume (signed: > 0 when oriented outward)
     double area = 0;
 
     /// Closed, manifold, consistently oriented and without degenerate triangles.
     bool watertight() const
     {
-        return boundaryEdges == 0 && nonManifoldEdges == 0 && nonManifoldVertices == 0 && misorientedEdges == 0 &&
-               degenerateTriangles == 0;
+        return boundaryEdges == 0 && nonManifoldEdges == 0 && nonManifoldVertices == 0 &&
+               misorientedEdges == 0 && degenerateTriangles == 0;
     }
 };
 

@@ -24,12 +24,12 @@ namespace fluidsurf {
 
 enum class Mesher { MarchingCubes, OpenVdb };
 
-const char* mesherName(Mesher m);                   ///< "mc" or "openvdb"
-Mesher mesherFromName(const std::string& name);     ///< ValueError for an unknown name
+const char* mesherName(Mesher m);               ///< "mc" or "openvdb"
+Mesher mesherFromName(const std::string& name); ///< ValueError for an unknown name
 
 struct MeshStats
 {
-    size_t surfaceCells = 0;  ///< cells with a sign change (MarchingCubes only)
+    size_t surfaceCells = 0; ///< cells with a sign change (MarchingCubes only)
     size_t vertices = 0, triangles = 0;
     double seconds = 0;
 };

@@ -12,16 +12,16 @@ namespace fluidsurf {
 
 /// Which scalar field is evaluated at the grid vertices.
 enum class FieldKind {
-    Ssp07,  ///< Solenthaler et al. 2007: phi = |x - xbar| - rbar * f(EV_max of grad xbar)
-    Zb05    ///< Zhu & Bridson 2005: the same with f == 1 (faster, blobs in concave regions)
+    Ssp07, ///< Solenthaler et al. 2007: phi = |x - xbar| - rbar * f(EV_max of grad xbar)
+    Zb05   ///< Zhu & Bridson 2005: the same with f == 1 (faster, blobs in concave regions)
 };
 
 /// How the field is computed. All three give the same field (up to float rounding for
 /// Scatter); they differ in cost and memory, which is what the thesis' Tables 4.4/4.5 compare.
 enum class FieldMethod {
-    NarrowBand,  ///< thesis ch. 4: only vertices near surface particles, parallel gather
-    GatherFull,  ///< baseline: parallel gather at every vertex of the bounding volume
-    Scatter      ///< baseline: serial, particles add to every vertex of the bounding volume
+    NarrowBand, ///< thesis ch. 4: only vertices near surface particles, parallel gather
+    GatherFull, ///< baseline: parallel gather at every vertex of the bounding volume
+    Scatter     ///< baseline: serial, particles add to every vertex of the bounding volume
 };
 
 /// Where the field is computed. Cuda runs the field gather on the first GPU (narrow band and
@@ -31,24 +31,24 @@ enum class Device { Cpu, Cuda, Auto };
 
 struct Params
 {
-    double radius = 0;           ///< r: particle radius, half the rest spacing
-    double voxelSize = 0;        ///< dx: grid (Marching Cubes cell) size; default r
-    double influenceRadius = 0;  ///< R: support of the field kernel; default 4r
-    double smoothingLength = 0;  ///< h: SPH support for neighbour counts/color field; default 4r
-    double bandWidth = 0;        ///< narrow band half width per axis around surface particles;
-                                 ///< default 2r (at least r + voxelSize is used, see NarrowBand.h)
-    double tLow = 0.4;           ///< EV_max below this: f = 1 (eq. 4.2)
-    double tHigh = 3.5;          ///< EV_max at or above this: f = 0 (eq. 4.3, clamped)
-    int surfaceNeighbours = 25;  ///< fewer neighbours within h: surface particle (thesis 4.2.2)
-    int splashNeighbours = 3;    ///< fewer neighbours within h: splash particle (ch. 6)
-    double colorFieldThreshold = 0.9;  ///< color field (eq. 4.6) below this: surface particle;
-                                       ///< ~1.0 inside the fluid, ~0.82 on a flat lattice face
-    double colorGradientThreshold = 0.45;  ///< |grad cf| * h above this: surface particle;
-                                           ///< 0 inside, 0.62 on a flat lattice face
-    double halfWidth = 3;        ///< level-set background = halfWidth * voxelSize
-    bool perParticleRadii = true;  ///< use a radius attribute (pscale) as r_j when present
-    bool keepIsolated = false;     ///< isolated particles join the field as spheres of radius r
-                                   ///< (default: left out of the grid and reported)
+    double radius = 0;          ///< r: particle radius, half the rest spacing
+    double voxelSize = 0;       ///< dx: grid (Marching Cubes cell) size; default r
+    double influenceRadius = 0; ///< R: support of the field kernel; default 4r
+    double smoothingLength = 0; ///< h: SPH support for neighbour counts/color field; default 4r
+    double bandWidth = 0;       ///< narrow band half width per axis around surface particles;
+                                ///< default 2r (at least r + voxelSize is used, see NarrowBand.h)
+    double tLow = 0.4;          ///< EV_max below this: f = 1 (eq. 4.2)
+    double tHigh = 3.5;         ///< EV_max at or above this: f = 0 (eq. 4.3, clamped)
+    int surfaceNeighbours = 25; ///< fewer neighbours within h: surface particle (thesis 4.2.2)
+    int splashNeighbours = 3;   ///< fewer neighbours within h: splash particle (ch. 6)
+    double colorFieldThreshold = 0.9;     ///< color field (eq. 4.6) below this: surface particle;
+                                          ///< ~1.0 inside the fluid, ~0.82 on a flat lattice face
+    double colorGradientThreshold = 0.45; ///< |grad cf| * h above this: surface particle;
+                                          ///< 0 inside, 0.62 on a flat lattice face
+    double halfWidth = 3;                 ///< level-set background = halfWidth * voxelSize
+    bool perParticleRadii = true;         ///< use a radius attribute (pscale) as r_j when present
+    bool keepIsolated = false; ///< isolated particles join the field as spheres of radius r
+                               ///< (default: left out of the grid and reported)
     FieldKind field = FieldKind::Ssp07;
     FieldMethod method = FieldMethod::NarrowBand;
     Device device = Device::Cpu;
@@ -62,11 +62,11 @@ struct Params
     double background() const { return halfWidth * voxelSize; }
 };
 
-const char* fieldName(FieldKind f);      ///< "ssp07", "zb05"
-const char* methodName(FieldMethod m);   ///< "narrow-band", "gather-full", "scatter"
-FieldKind fieldFromName(const std::string& name);      ///< ValueError for unknown names
-FieldMethod methodFromName(const std::string& name);   ///< ValueError for unknown names
-const char* deviceName(Device d);                      ///< "cpu", "cuda", "auto"
-Device deviceFromName(const std::string& name);        ///< ValueError for unknown names
+const char* fieldName(FieldKind f);                  ///< "ssp07", "zb05"
+const char* methodName(FieldMethod m);               ///< "narrow-band", "gather-full", "scatter"
+FieldKind fieldFromName(const std::string& name);    ///< ValueError for unknown names
+FieldMethod methodFromName(const std::string& name); ///< ValueError for unknown names
+const char* deviceName(Device d);                    ///< "cpu", "cuda", "auto"
+Device deviceFromName(const std::string& name);      ///< ValueError for unknown names
 
 } // namespace fluidsurf

@@ -24,11 +24,11 @@ struct Attribute
     std::string name;
     AttributeType type = AttributeType::Float;
     int components = 1;
-    std::vector<float> floats;  ///< used when type == Float
-    std::vector<int64_t> ints;  ///< used when type == Int
+    std::vector<float> floats; ///< used when type == Float
+    std::vector<int64_t> ints; ///< used when type == Int
 
     size_t size() const { return type == AttributeType::Float ? floats.size() : ints.size(); }
-    const char* typeName() const;  ///< "float", "float3", "int", ...
+    const char* typeName() const; ///< "float", "float3", "int", ...
 };
 
 enum class AttributeRole { Radius, Velocity, Density, Id };

@@ -32,11 +32,11 @@ struct StageTime
 struct RasterizeStats
 {
     size_t particles = 0;
-    size_t interior = 0, surface = 0, splash = 0, isolated = 0;  ///< surface excludes splash
+    size_t interior = 0, surface = 0, splash = 0, isolated = 0; ///< surface excludes splash
     size_t activeVoxels = 0, leaves = 0;
-    size_t fieldEvaluations = 0;  ///< vertices at which phi was computed
-    size_t bandCompletion = 0;    ///< voxels added where a zero crossing reached the band's edge
-    double bandWidth = 0;         ///< half width actually used, world units
+    size_t fieldEvaluations = 0; ///< vertices at which phi was computed
+    size_t bandCompletion = 0;   ///< voxels added where a zero crossing reached the band's edge
+    double bandWidth = 0;        ///< half width actually used, world units
     std::vector<StageTime> stages;
     double totalSeconds() const;
     /// Where the field ran: "cpu", the GPU's name, or with Device::Auto "cpu (CUDA failed: why)".
@@ -45,15 +45,14 @@ struct RasterizeStats
     /// gather, download, completion gather; gather-full: upload, gather, download), GPU time from
     /// CUDA events, inside the host stages above and not in totalSeconds.
     std::vector<StageTime> gpuStages;
-    size_t gpuBytes = 0;  ///< peak device memory the CUDA stages held
-
+    size_t gpuBytes = 0; ///< peak device memory the CUDA stages held
 };
 
 struct RasterizeResult
 {
     openvdb::FloatGrid::Ptr grid;
-    std::vector<uint32_t> isolatedParticles;  ///< left out of the grid: indices into the input,
-                                              ///< ascending (empty with keepIsolated)
+    std::vector<uint32_t> isolatedParticles; ///< left out of the grid: indices into the input,
+                                             ///< ascending (empty with keepIsolated)
     RasterizeStats stats;
 };
 

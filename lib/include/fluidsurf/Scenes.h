@@ -32,7 +32,7 @@ struct SceneParams
     int droplets = 5;            ///< drop: isolated single particles
 };
 
-Scene sceneFromName(const std::string& name);  ///< ValueError for an unknown name
+Scene sceneFromName(const std::string& name); ///< ValueError for an unknown name
 const char* sceneName(Scene scene);
 std::vector<std::string> sceneNames();
 

@@ -10,10 +10,10 @@ namespace fluidsurf {
 
 struct SpacingEstimate
 {
-    double medianNearest = 0;  ///< median nearest-neighbour distance, world units (0: unknown)
-    double radius = 0;         ///< implied particle radius r = medianNearest / 2
-    size_t sampled = 0;        ///< particles whose nearest neighbour was measured
-    size_t isolated = 0;       ///< sampled particles with no neighbour in reach
+    double medianNearest = 0; ///< median nearest-neighbour distance, world units (0: unknown)
+    double radius = 0;        ///< implied particle radius r = medianNearest / 2
+    size_t sampled = 0;       ///< particles whose nearest neighbour was measured
+    size_t isolated = 0;      ///< sampled particles with no neighbour in reach
 };
 
 /// Exact nearest neighbours for up to maxSamples evenly spaced particles (all if fewer).

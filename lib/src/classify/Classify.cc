@@ -17,11 +17,12 @@ using util::Lanes;
 
 struct Neighbourhood
 {
-    std::vector<float> x, y, z, v;  // candidates of one cell, padded to a multiple of kLanes
+    std::vector<float> x, y, z, v; // candidates of one cell, padded to a multiple of kLanes
     void clear() { x.clear(), y.clear(), z.clear(), v.clear(); }
     void pad()
     {
-        while (x.size() % kLanes) x.push_back(3e38f), y.push_back(3e38f), z.push_back(3e38f), v.push_back(0);
+        while (x.size() % kLanes)
+            x.push_back(3e38f), y.push_back(3e38f), z.push_back(3e38f), v.push_back(0);
     }
 };
 } // namespace
@@ -43,7 +44,8 @@ ClassRule classRule(const Params& params)
     ClassRule r;
     r.poly6 = k.poly6, r.gradientScale = k.gradientScale;
     r.splashNeighbours = params.splashNeighbours, r.surfaceNeighbours = params.surfaceNeighbours;
-    r.colorFieldThreshold = params.colorFieldThreshold, r.colorGradientThreshold = params.colorGradientThreshold;
+    r.colorFieldThreshold = params.colorFieldThreshold,
+    r.colorGradientThreshold = params.colorGradientThreshold;
     return r;
 }
 
@@ -60,61 +62,71 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     const double h = k.h, uniformVolume = k.uniformVolume;
     const float h2 = k.h2;
 
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, index.cellCount(), 16), [&](const tbb::blocked_range<size_t>& cells) {
-        Neighbourhood nb;
-        for (size_t c = cells.begin(); c != cells.end(); ++c) {
-            const uint32_t b = index.starts[c], e = index.starts[c + 1];
-            // Box of the cell's particles, widened by h: everything any of them can reach.
-            // Coordinates relative to the first particle keep float rounding small.
-            const Vec3f o = index.positions[b];
-            double lo[3] = {o.x, o.y, o.z}, hi[3] = {o.x, o.y, o.z};
-            for (uint32_t i = b; i < e; ++i)
-                for (int a = 0; a < 3; ++a) {
-                    lo[a] = std::min(lo[a], double(index.positions[i][a]));
-                    hi[a] = std::max(hi[a], double(index.positions[i][a]));
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, index.cellCount(), 16),
+        [&](const tbb::blocked_range<size_t>& cells) {
+            Neighbourhood nb;
+            for (size_t c = cells.begin(); c != cells.end(); ++c) {
+                const uint32_t b = index.starts[c], e = index.starts[c + 1];
+                // Box of the cell's particles, widened by h: everything any of them can reach.
+                // Coordinates relative to the first particle keep float rounding small.
+                const Vec3f o = index.positions[b];
+                double lo[3] = {o.x, o.y, o.z}, hi[3] = {o.x, o.y, o.z};
+                for (uint32_t i = b; i < e; ++i)
+                    for (int a = 0; a < 3; ++a) {
+                        lo[a] = std::min(lo[a], double(index.positions[i][a]));
+                        hi[a] = std::max(hi[a], double(index.positions[i][a]));
+                    }
+                for (int a = 0; a < 3; ++a)
+                    lo[a] -= h, hi[a] += h;
+                nb.clear();
+                index.forEachCellInBox(lo, hi, [&](uint32_t cb, uint32_t ce) {
+                    for (uint32_t j = cb; j < ce; ++j) {
+                        const Vec3f& p = index.positions[j];
+                        nb.x.push_back(float(double(p.x) - o.x));
+                        nb.y.push_back(float(double(p.y) - o.y));
+                        nb.z.push_back(float(double(p.z) - o.z));
+                        const double rj = index.radii.empty() ? params.radius : index.radii[j];
+                        nb.v.push_back(
+                            float(index.radii.empty() ? uniformVolume : 8 * rj * rj * rj));
+                    }
+                });
+                nb.pad();
+                const size_t m = nb.x.size();
+                for (uint32_t i = b; i < e; ++i) {
+                    const Vec3f& p = index.positions[i];
+                    const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y),
+                                pz = float(double(p.z) - o.z);
+                    Lanes count{}, cf{}, gx{}, gy{}, gz{};
+                    for (size_t j = 0; j < m; j += kLanes) {
+                        const Lanes dx = util::loadLanes(&nb.x[j]) - px,
+                                    dy = util::loadLanes(&nb.y[j]) - py,
+                                    dz = util::loadLanes(&nb.z[j]) - pz;
+                        const Lanes d2 = dx * dx + dy * dy + dz * dz;
+                        Lanes t = h2 - d2;
+                        t = t > 0.f ? t : 0.f;
+                        count += d2 < h2 ? Lanes{} + 1.f : Lanes{};
+                        const Lanes vt2 = util::loadLanes(&nb.v[j]) * t * t;
+                        cf += vt2 * t;
+                        gx += vt2 * dx, gy += vt2 * dy, gz += vt2 * dz;
+                    }
+                    const ParticleSums ps = classifyLanes(count, cf, gx, gy, gz, rule);
+                    out.neighbours[i] = ps.neighbours;
+                    out.colorField[i] = ps.colorField;
+                    out.colorGradient[i] = ps.gradient;
+                    out.classes[i] = ps.cls;
                 }
-            for (int a = 0; a < 3; ++a) lo[a] -= h, hi[a] += h;
-            nb.clear();
-            index.forEachCellInBox(lo, hi, [&](uint32_t cb, uint32_t ce) {
-                for (uint32_t j = cb; j < ce; ++j) {
-                    const Vec3f& p = index.positions[j];
-                    nb.x.push_back(float(double(p.x) - o.x));
-                    nb.y.push_back(float(double(p.y) - o.y));
-                    nb.z.push_back(float(double(p.z) - o.z));
-                    const double rj = index.radii.empty() ? params.radius : index.radii[j];
-                    nb.v.push_back(float(index.radii.empty() ? uniformVolume : 8 * rj * rj * rj));
-                }
-            });
-            nb.pad();
-            const size_t m = nb.x.size();
-            for (uint32_t i = b; i < e; ++i) {
-                const Vec3f& p = index.positions[i];
-                const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y), pz = float(double(p.z) - o.z);
-                Lanes count{}, cf{}, gx{}, gy{}, gz{};
-                for (size_t j = 0; j < m; j += kLanes) {
-                    const Lanes dx = util::loadLanes(&nb.x[j]) - px, dy = util::loadLanes(&nb.y[j]) - py,
-                                dz = util::loadLanes(&nb.z[j]) - pz;
-                    const Lanes d2 = dx * dx + dy * dy + dz * dz;
-                    Lanes t = h2 - d2;
-                    t = t > 0.f ? t : 0.f;
-                    count += d2 < h2 ? Lanes{} + 1.f : Lanes{};
-                    const Lanes vt2 = util::loadLanes(&nb.v[j]) * t * t;
-                    cf += vt2 * t;
-                    gx += vt2 * dx, gy += vt2 * dy, gz += vt2 * dz;
-                }
-                const ParticleSums ps = classifyLanes(count, cf, gx, gy, gz, rule);
-                out.neighbours[i] = ps.neighbours;
-                out.colorField[i] = ps.colorField;
-                out.colorGradient[i] = ps.gradient;
-                out.classes[i] = ps.cls;
             }
-        }
-    });
+        });
     for (uint8_t c : out.classes) {
-        if (c == Interior) ++out.interior;
-        else if (c == Surface) ++out.surface;
-        else if (c == Splash) ++out.splash;
-        else ++out.isolated;
+        if (c == Interior)
+            ++out.interior;
+        else if (c == Surface)
+            ++out.surface;
+        else if (c == Splash)
+            ++out.splash;
+        else
+            ++out.isolated;
     }
     return out;
 }

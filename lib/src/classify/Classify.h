@@ -28,26 +28,29 @@
 namespace fluidsurf {
 namespace classify {
 
-inline bool isSurface(uint8_t c) { return c == Surface || c == Splash; }
+inline bool isSurface(uint8_t c)
+{
+    return c == Surface || c == Splash;
+}
 
 struct Classification
 {
-    std::vector<uint8_t> classes;       ///< per particle, in the index's cell order
-    std::vector<uint32_t> neighbours;   ///< other particles closer than h
-    std::vector<float> colorField;      ///< cf_i as above
-    std::vector<float> colorGradient;   ///< |grad cf_i| * h (MCG03's surface normal length)
-    size_t interior = 0, surface = 0, splash = 0, isolated = 0;  ///< surface excludes splash
+    std::vector<uint8_t> classes;     ///< per particle, in the index's cell order
+    std::vector<uint32_t> neighbours; ///< other particles closer than h
+    std::vector<float> colorField;    ///< cf_i as above
+    std::vector<float> colorGradient; ///< |grad cf_i| * h (MCG03's surface normal length)
+    size_t interior = 0, surface = 0, splash = 0, isolated = 0; ///< surface excludes splash
 };
 
 /// The kernel constants, computed once here for the CPU and the CUDA classification alike (the
 /// two must round identically).
 struct KernelConstants
 {
-    double h = 0;              ///< smoothing length
-    float h2 = 0;              ///< float(h * h)
-    double poly6 = 0;          ///< 315 / (64 pi h^9)
-    double gradientScale = 0;  ///< 6 poly6 h: |grad cf| h = gradientScale |sum V t^2 d|
-    double uniformVolume = 0;  ///< (2r)^3
+    double h = 0;             ///< smoothing length
+    float h2 = 0;             ///< float(h * h)
+    double poly6 = 0;         ///< 315 / (64 pi h^9)
+    double gradientScale = 0; ///< 6 poly6 h: |grad cf| h = gradientScale |sum V t^2 d|
+    double uniformVolume = 0; ///< (2r)^3
 };
 KernelConstants kernelConstants(const Params& params);
 

@@ -126,8 +126,8 @@ size_t evaluateFieldCuda(openvdb::FloatTree& tree, const neighbors::CellIndex& p
             in.radii = particles.radii.empty() ? nullptr : particles.radii.data();
             in.particleCount = particles.size();
             in.tableKeys = particles.tableKeys.data();
-        in.tableCells = particles.tableCells.data();
-        in.tableSize = particles.tableKeys.size();
+            in.tableCells = particles.tableCells.data();
+            in.tableSize = particles.tableKeys.size();
             in.cellStarts = particles.starts.data();
             in.cellCount = particles.cellCount();
             in.cellSize = particles.cellSize;

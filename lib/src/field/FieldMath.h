@@ -19,22 +19,25 @@ struct FieldSums
 {
     double w = 0;
     double d[3] = {0, 0, 0};
-    double r = 0;                    ///< sum w_j r_j (per-particle radii only)
+    double r = 0; ///< sum w_j r_j (per-particle radii only)
     double g[3] = {0, 0, 0};
-    double m[6] = {0, 0, 0, 0, 0, 0};  ///< xx, xy, xz, yy, yz, zz
+    double m[6] = {0, 0, 0, 0, 0, 0}; ///< xx, xy, xz, yy, yz, zz
 };
 
 struct FieldConstants
 {
     double influenceRadius = 0;
-    double radius = 0;          ///< uniform r (used when perParticleRadii is false)
+    double radius = 0; ///< uniform r (used when perParticleRadii is false)
     bool perParticleRadii = false;
     bool ssp07 = true;
     double tLow = 0.4, tHigh = 3.5;
-    float background = 0;       ///< phi is clamped to [-background, background]
+    float background = 0; ///< phi is clamped to [-background, background]
 };
 
-FLUIDSURF_HD inline double clampTo(double v, double lo, double hi) { return fmin(fmax(v, lo), hi); }
+FLUIDSURF_HD inline double clampTo(double v, double lo, double hi)
+{
+    return fmin(fmax(v, lo), hi);
+}
 
 /// Largest eigenvalue of the symmetric 3x3 matrix (xx, xy, xz, yy, yz, zz).
 FLUIDSURF_HD inline double largestEigenvalueSym(const double a[6])
@@ -43,10 +46,11 @@ FLUIDSURF_HD inline double largestEigenvalueSym(const double a[6])
     const double q = (a[0] + a[3] + a[5]) / 3;
     const double b0 = a[0] - q, b3 = a[3] - q, b5 = a[5] - q;
     const double p2 = b0 * b0 + b3 * b3 + b5 * b5 + 2 * p1;
-    if (!(p2 > 1e-30 * (q * q + 1e-300))) return q;  // a multiple of the identity
+    if (!(p2 > 1e-30 * (q * q + 1e-300))) return q; // a multiple of the identity
     const double p = sqrt(p2 / 6);
     // det((A - qI) / p) / 2, clamped against rounding before acos.
-    const double det = b0 * (b3 * b5 - a[4] * a[4]) - a[1] * (a[1] * b5 - a[4] * a[2]) + a[2] * (a[1] * a[4] - b3 * a[2]);
+    const double det = b0 * (b3 * b5 - a[4] * a[4]) - a[1] * (a[1] * b5 - a[4] * a[2]) +
+                       a[2] * (a[1] * a[4] - b3 * a[2]);
     const double half = clampTo(det / (2 * p * p * p), -1.0, 1.0);
     return q + 2 * p * cos(acos(half) / 3);
 }
@@ -72,8 +76,9 @@ FLUIDSURF_HD inline float fieldValue(const FieldSums& s, const FieldConstants& c
             k * (s.m[5] - xb[2] * s.g[2]),
         };
         // Gershgorin bound: when every disc lies below t_low, f = 1 without the eigen-solve.
-        const double bound = fmax(fmax(sym[0] + fabs(sym[1]) + fabs(sym[2]), sym[3] + fabs(sym[1]) + fabs(sym[4])),
-                                  sym[5] + fabs(sym[2]) + fabs(sym[4]));
+        const double bound =
+            fmax(fmax(sym[0] + fabs(sym[1]) + fabs(sym[2]), sym[3] + fabs(sym[1]) + fabs(sym[4])),
+                 sym[5] + fabs(sym[2]) + fabs(sym[4]));
         if (bound >= c.tLow) {
             const double ev = largestEigenvalueSym(sym);
             if (ev >= c.tLow) {

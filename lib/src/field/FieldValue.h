@@ -26,8 +26,7 @@ namespace field {
 
 /// The same sums while they are accumulated, in float (scatter: one vertex) or in
 /// util::Lanes (gather: independent per-lane partial sums).
-template <typename T>
-struct PartialSums
+template <typename T> struct PartialSums
 {
     T w{}, d0{}, d1{}, d2{}, r{}, g0{}, g1{}, g2{}, m0{}, m1{}, m2{}, m3{}, m4{}, m5{};
 };
@@ -54,15 +53,17 @@ inline void addParticle(PartialSums<T>& a, T ex, T ey, T ez, T s2, T rj)
     }
 }
 
-inline double laneSum(float v) { return v; }
+inline double laneSum(float v)
+{
+    return v;
+}
 inline double laneSum(const util::Lanes& v)
 {
     static_assert(util::kLanes == 4, "pairwise lane sum written for 4 lanes");
-    return (v[0] + v[1]) + (v[2] + v[3]);  // fixed order: deterministic; float like the lanes
+    return (v[0] + v[1]) + (v[2] + v[3]); // fixed order: deterministic; float like the lanes
 }
 
-template <typename T>
-FieldSums toFieldSums(const PartialSums<T>& a)
+template <typename T> FieldSums toFieldSums(const PartialSums<T>& a)
 {
     FieldSums s;
     s.w = laneSum(a.w), s.r = laneSum(a.r);

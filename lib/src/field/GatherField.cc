@@ -21,11 +21,14 @@ namespace {
 
 using util::kLanes;
 using util::Lanes;
-constexpr float kFar = 1e30f;    // padding particle: s^2 = inf -> contributes 0
+constexpr float kFar = 1e30f; // padding particle: s^2 = inf -> contributes 0
 
 using LeafT = openvdb::FloatTree::LeafNodeType;
 
-inline Lanes load(const float* p) { return util::loadLanes(p); }
+inline Lanes load(const float* p)
+{
+    return util::loadLanes(p);
+}
 
 // floor for values well inside the int range; std::floor is a libm call on baseline x86-64.
 inline int floorInt(double v)
@@ -38,13 +41,13 @@ inline int floorInt(double v)
 /// and y); and the subset of one voxel row, sorted by z-slab. Reused from leaf to leaf by one task.
 struct Scratch
 {
-    std::vector<float> x, y, z, r;            // gathered, in cell order
+    std::vector<float> x, y, z, r; // gathered, in cell order
     std::vector<uint32_t> column;
-    std::vector<float> sx, sy, sz, sr;        // sorted by column
-    std::vector<uint16_t> slab;               //   and each one's z-slab
+    std::vector<float> sx, sy, sz, sr; // sorted by column
+    std::vector<uint16_t> slab;        //   and each one's z-slab
     std::vector<uint32_t> columnStart;
-    std::vector<uint32_t> picked;             // one row, in column order
-    std::vector<float> rx, ry, rz, rr;        // one row, by z-slab, padded with kLanes far particles
+    std::vector<uint32_t> picked;      // one row, in column order
+    std::vector<float> rx, ry, rz, rr; // one row, by z-slab, padded with kLanes far particles
     std::vector<uint32_t> rowSlabStart, cursor;
 };
 
@@ -53,14 +56,17 @@ struct Kernel
     const neighbors::CellIndex& particles;
     FieldConstants constants;
     double dx, R;
-    int reach;     // slabs of width dx within R of a voxel on either side
+    int reach; // slabs of width dx within R of a voxel on either side
     bool radii;
-    int binSlabs;  // columns are this many slabs wide in x and y (few columns for large R)
+    int binSlabs; // columns are this many slabs wide in x and y (few columns for large R)
     double invDx = 1 / dx, invBinSlabs = 1.0 / binSlabs;
 
     // Slabs per axis: the leaf's voxels and reach more on either side (at most 65535: uint16_t).
     int slabCount() const { return LeafT::DIM + 2 * reach; }
-    int slabOf(double local) const { return std::clamp(floorInt(local * invDx) + reach, 0, slabCount() - 1); }
+    int slabOf(double local) const
+    {
+        return std::clamp(floorInt(local * invDx) + reach, 0, slabCount() - 1);
+    }
     int binCount() const { return (slabCount() + binSlabs - 1) / binSlabs; }
     int binOf(double local) const
     {
@@ -75,14 +81,17 @@ struct Kernel
         const double o[3] = {origin.x() * dx, origin.y() * dx, origin.z() * dx};
         const double extent = (LeafT::DIM - 1) * dx;
         double lo[3], hi[3];
-        for (int a = 0; a < 3; ++a) lo[a] = o[a] - R, hi[a] = o[a] + extent + R;
+        for (int a = 0; a < 3; ++a)
+            lo[a] = o[a] - R, hi[a] = o[a] + extent + R;
         s.x.clear(), s.y.clear(), s.z.clear(), s.r.clear(), s.column.clear();
         const int B = binCount();
         particles.forEachCellInBox(lo, hi, [&](uint32_t b, uint32_t e) {
             for (uint32_t i = b; i < e; ++i) {
                 const Vec3f& p = particles.positions[i];
                 const double lx = p.x - o[0], ly = p.y - o[1], lz = p.z - o[2];
-                if (!(lx > -R && lx < extent + R && ly > -R && ly < extent + R && lz > -R && lz < extent + R)) continue;
+                if (!(lx > -R && lx < extent + R && ly > -R && ly < extent + R && lz > -R &&
+                      lz < extent + R))
+                    continue;
                 s.x.push_back(float(lx));
                 s.y.push_back(float(ly));
                 s.z.push_back(float(lz));
@@ -93,11 +102,14 @@ struct Kernel
         // Counting sort by column (stable: within a column the order stays the cell order).
         const size_t columns = size_t(B) * B;
         s.columnStart.assign(columns + 1, 0);
-        for (uint32_t c : s.column) ++s.columnStart[c + 1];
-        for (size_t c = 0; c < columns; ++c) s.columnStart[c + 1] += s.columnStart[c];
+        for (uint32_t c : s.column)
+            ++s.columnStart[c + 1];
+        for (size_t c = 0; c < columns; ++c)
+            s.columnStart[c + 1] += s.columnStart[c];
         const size_t n = s.x.size();
-        s.sx.resize(n), s.sy.resize(n), s.sz.resize(n), s.sr.resize(radii ? n : 0), s.slab.resize(n);
-        s.picked.assign(s.columnStart.begin(), s.columnStart.end());  // borrowed as fill cursors
+        s.sx.resize(n), s.sy.resize(n), s.sz.resize(n), s.sr.resize(radii ? n : 0),
+            s.slab.resize(n);
+        s.picked.assign(s.columnStart.begin(), s.columnStart.end()); // borrowed as fill cursors
         for (size_t i = 0; i < n; ++i) {
             const uint32_t at = s.picked[s.column[i]]++;
             s.sx[at] = s.x[i], s.sy[at] = s.y[i], s.sz[at] = s.z[i];
@@ -105,7 +117,8 @@ struct Kernel
             if (radii) s.sr[at] = s.r[i];
         }
         s.picked.resize(n);
-        s.rx.resize(n + kLanes), s.ry.resize(n + kLanes), s.rz.resize(n + kLanes), s.rr.resize(radii ? n + kLanes : 0);
+        s.rx.resize(n + kLanes), s.ry.resize(n + kLanes), s.rz.resize(n + kLanes),
+            s.rr.resize(radii ? n + kLanes : 0);
     }
 
     // The particles within R of the row's (x, y) line, by z-slab. For every x-column within R
@@ -119,11 +132,14 @@ struct Kernel
         uint32_t n = 0;
         s.rowSlabStart.assign(S + 1, 0);
         for (int xb = binOf(vx - R), xe = binOf(vx + R); xb <= xe; ++xb) {
-            // Distance from vx to the column's x range [(xb q - reach) dx, ((xb + 1) q - reach) dx).
-            const double gap = std::max({0.0, (xb * binSlabs - reach) * dx - vx, vx - ((xb + 1) * binSlabs - reach) * dx});
+            // Distance from vx to the column's x range [(xb q - reach) dx, ((xb + 1) q - reach)
+            // dx).
+            const double gap = std::max(
+                {0.0, (xb * binSlabs - reach) * dx - vx, vx - ((xb + 1) * binSlabs - reach) * dx});
             if (gap >= R) continue;
             const double w = std::sqrt(R * R - gap * gap) + 1e-4 * dx;
-            const uint32_t b = s.columnStart[xb * B + binOf(vy - w)], e = s.columnStart[xb * B + binOf(vy + w) + 1];
+            const uint32_t b = s.columnStart[xb * B + binOf(vy - w)],
+                           e = s.columnStart[xb * B + binOf(vy + w) + 1];
             for (uint32_t p = b; p < e; ++p) {
                 const float ex = s.sx[p] - fx, ey = s.sy[p] - fy;
                 if (ex * ex + ey * ey >= R2) continue;
@@ -131,7 +147,8 @@ struct Kernel
                 ++s.rowSlabStart[s.slab[p] + 1];
             }
         }
-        for (int z = 0; z < S; ++z) s.rowSlabStart[z + 1] += s.rowSlabStart[z];
+        for (int z = 0; z < S; ++z)
+            s.rowSlabStart[z + 1] += s.rowSlabStart[z];
         s.cursor.assign(s.rowSlabStart.begin(), s.rowSlabStart.end() - 1);
         for (uint32_t q = 0; q < n; ++q) {
             const uint32_t p = s.picked[q], at = s.cursor[s.slab[p]]++;
@@ -167,9 +184,10 @@ struct Kernel
         const auto& mask = leaf.getValueMask();
         for (int i = 0; i < int(LeafT::DIM); ++i)
             for (int j = 0; j < int(LeafT::DIM); ++j) {
-                const int rowOffset = (i << 6) | (j << 3);  // OpenVDB leaf layout: z fastest
+                const int rowOffset = (i << 6) | (j << 3); // OpenVDB leaf layout: z fastest
                 bool any = false;
-                for (int k = 0; k < int(LeafT::DIM); ++k) any |= mask.isOn(rowOffset + k);
+                for (int k = 0; k < int(LeafT::DIM); ++k)
+                    any |= mask.isOn(rowOffset + k);
                 if (!any) continue;
                 const float vx = float(i * dx), vy = float(j * dx);
                 selectRow(i, j, s);
@@ -179,9 +197,11 @@ struct Kernel
                     const float vz = float(k * dx);
                     FieldSums sum;
                     if (constants.ssp07)
-                        sum = radii ? sums<true, true>(s, b, e, vx, vy, vz) : sums<true, false>(s, b, e, vx, vy, vz);
+                        sum = radii ? sums<true, true>(s, b, e, vx, vy, vz)
+                                    : sums<true, false>(s, b, e, vx, vy, vz);
                     else
-                        sum = radii ? sums<false, true>(s, b, e, vx, vy, vz) : sums<false, false>(s, b, e, vx, vy, vz);
+                        sum = radii ? sums<false, true>(s, b, e, vx, vy, vz)
+                                    : sums<false, false>(s, b, e, vx, vy, vz);
                     leaf.setValueOnly(rowOffset + k, fieldValue(sum, constants));
                     ++evaluations;
                 }
@@ -192,21 +212,29 @@ struct Kernel
 
 } // namespace
 
-size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles, const Params& params)
+size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
+                     const Params& params)
 {
     const bool radii = !particles.radii.empty();
     const int reach = int(std::ceil(params.influenceRadius / params.voxelSize));
     const int slabs = int(LeafT::DIM) + 2 * reach;
-    Kernel kernel{particles, fieldConstants(params, radii), params.voxelSize, params.influenceRadius,
-                  reach, radii, (slabs + 15) / 16};  // at most 16 x 16 columns
+    Kernel kernel{particles,
+                  fieldConstants(params, radii),
+                  params.voxelSize,
+                  params.influenceRadius,
+                  reach,
+                  radii,
+                  (slabs + 15) / 16}; // at most 16 x 16 columns
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
     std::atomic<size_t> evaluations{0};
-    tbb::parallel_for(leaves.leafRange(1), [&](const openvdb::tree::LeafManager<openvdb::FloatTree>::LeafRange& range) {
-        Scratch scratch;
-        size_t n = 0;
-        for (auto leaf = range.begin(); leaf; ++leaf) n += kernel.leaf(*leaf, scratch);
-        evaluations += n;
-    });
+    tbb::parallel_for(leaves.leafRange(1),
+                      [&](const openvdb::tree::LeafManager<openvdb::FloatTree>::LeafRange& range) {
+                          Scratch scratch;
+                          size_t n = 0;
+                          for (auto leaf = range.begin(); leaf; ++leaf)
+                              n += kernel.leaf(*leaf, scratch);
+                          evaluations += n;
+                      });
     return evaluations;
 }
 

@@ -24,7 +24,8 @@ namespace field {
 
 /// Fill every active voxel of tree (voxel (i,j,k) at (i,j,k) * voxelSize) with phi, clamped to
 /// +-background. Inactive voxels are left alone. Returns the number of field evaluations.
-size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles, const Params& params);
+size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
+                     const Params& params);
 
 } // namespace field
 } // namespace fluidsurf

@@ -13,8 +13,8 @@ namespace field {
 namespace {
 /// Every particle adds itself to every vertex within R of it, in particle order.
 template <bool Ssp07, bool Radii>
-void scatter(const neighbors::CellIndex& particles, const openvdb::CoordBBox& box, double dx, double R,
-             std::vector<PartialSums<float>>& acc)
+void scatter(const neighbors::CellIndex& particles, const openvdb::CoordBBox& box, double dx,
+             double R, std::vector<PartialSums<float>>& acc)
 {
     const openvdb::Coord lo = box.min(), dim = box.dim();
     const size_t ny = dim.y(), nz = dim.z();
@@ -30,17 +30,21 @@ void scatter(const neighbors::CellIndex& particles, const openvdb::CoordBBox& bo
         for (int i = a0[0]; i <= a1[0]; ++i)
             for (int j = a0[1]; j <= a1[1]; ++j)
                 for (int k = a0[2]; k <= a1[2]; ++k) {
-                    const float ex = float(x.x - i * dx), ey = float(x.y - j * dx), ez = float(x.z - k * dx);
+                    const float ex = float(x.x - i * dx), ey = float(x.y - j * dx),
+                                ez = float(x.z - k * dx);
                     const float s2 = (ex * ex + ey * ey + ez * ez) * invR2;
-                    if (!(s2 < 1.f)) continue;  // adds zero; skipping it is what makes scatter fast
-                    addParticle<Ssp07, Radii>(acc[(size_t(i - lo.x()) * ny + size_t(j - lo.y())) * nz + size_t(k - lo.z())],
-                                              ex, ey, ez, s2, rp);
+                    if (!(s2 < 1.f)) continue; // adds zero; skipping it is what makes scatter fast
+                    addParticle<Ssp07, Radii>(
+                        acc[(size_t(i - lo.x()) * ny + size_t(j - lo.y())) * nz +
+                            size_t(k - lo.z())],
+                        ex, ey, ez, s2, rp);
                 }
     }
 }
 } // namespace
 
-openvdb::FloatTree::Ptr scatterField(const neighbors::CellIndex& particles, const Params& params, size_t* evaluations)
+openvdb::FloatTree::Ptr scatterField(const neighbors::CellIndex& particles, const Params& params,
+                                     size_t* evaluations)
 {
     const bool radii = !particles.radii.empty();
     const FieldConstants constants = fieldConstants(params, radii);
@@ -53,9 +57,11 @@ openvdb::FloatTree::Ptr scatterField(const neighbors::CellIndex& particles, cons
     std::vector<PartialSums<float>> acc(nx * ny * nz);
     const double dx = params.voxelSize, R = params.influenceRadius;
     if (constants.ssp07)
-        radii ? scatter<true, true>(particles, box, dx, R, acc) : scatter<true, false>(particles, box, dx, R, acc);
+        radii ? scatter<true, true>(particles, box, dx, R, acc)
+              : scatter<true, false>(particles, box, dx, R, acc);
     else
-        radii ? scatter<false, true>(particles, box, dx, R, acc) : scatter<false, false>(particles, box, dx, R, acc);
+        radii ? scatter<false, true>(particles, box, dx, R, acc)
+              : scatter<false, false>(particles, box, dx, R, acc);
 
     openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*tree);
     for (size_t i = 0; i < nx; ++i)
@@ -63,7 +69,8 @@ openvdb::FloatTree::Ptr scatterField(const neighbors::CellIndex& particles, cons
             for (size_t k = 0; k < nz; ++k) {
                 const float phi = fieldValue(toFieldSums(acc[(i * ny + j) * nz + k]), constants);
                 if (std::abs(phi) < constants.background)
-                    out.setValue(openvdb::Coord(int(i) + lo.x(), int(j) + lo.y(), int(k) + lo.z()), phi);
+                    out.setValue(openvdb::Coord(int(i) + lo.x(), int(j) + lo.y(), int(k) + lo.z()),
+                                 phi);
             }
     if (evaluations) *evaluations = nx * ny * nz;
     return tree;

@@ -19,21 +19,25 @@ struct SplitMix64
         z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
         return z ^ (z >> 31);
     }
-    double uniform() { return double(next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
+    double uniform() { return double(next() >> 11) * (1.0 / 9007199254740992.0); } // [0, 1)
 };
 
 struct Builder
 {
     ParticleSet set;
     double spacing;
-    void add(double x, double y, double z) { set.positions.emplace_back(float(x), float(y), float(z)); }
+    void add(double x, double y, double z)
+    {
+        set.positions.emplace_back(float(x), float(y), float(z));
+    }
 };
 
 void addBlock(Builder& b, int nx, int ny, int nz, double ox, double oy, double oz)
 {
     for (int k = 0; k < nz; ++k)
         for (int j = 0; j < ny; ++j)
-            for (int i = 0; i < nx; ++i) b.add(ox + i * b.spacing, oy + j * b.spacing, oz + k * b.spacing);
+            for (int i = 0; i < nx; ++i)
+                b.add(ox + i * b.spacing, oy + j * b.spacing, oz + k * b.spacing);
 }
 
 void addBall(Builder& b, double rho, double cx, double cy, double cz)
@@ -61,25 +65,36 @@ Scene sceneFromName(const std::string& name)
 const char* sceneName(Scene s)
 {
     switch (s) {
-    case Scene::Single: return "single";
-    case Scene::Block: return "block";
-    case Scene::Ball: return "ball";
-    case Scene::Slab: return "slab";
-    case Scene::Drop: return "drop";
+    case Scene::Single:
+        return "single";
+    case Scene::Block:
+        return "block";
+    case Scene::Ball:
+        return "ball";
+    case Scene::Slab:
+        return "slab";
+    case Scene::Drop:
+        return "drop";
     }
     return "?";
 }
 
-std::vector<std::string> sceneNames() { return {"single", "block", "ball", "slab", "drop"}; }
+std::vector<std::string> sceneNames()
+{
+    return {"single", "block", "ball", "slab", "drop"};
+}
 
 ParticleSet generateScene(Scene scene, const SceneParams& p)
 {
-    if (!(p.radius > 0) || !std::isfinite(p.radius)) throw ValueError("scene radius must be positive");
+    if (!(p.radius > 0) || !std::isfinite(p.radius))
+        throw ValueError("scene radius must be positive");
     if (p.count < 1 || p.count > (size_t(1) << 31)) throw ValueError("scene count must be 1..2^31");
     if (p.layers < 1) throw ValueError("slab layers must be >= 1");
-    if (!(p.jitter >= 0 && p.jitter < 0.5)) throw ValueError("slab jitter must be in [0, 0.5) spacings");
+    if (!(p.jitter >= 0 && p.jitter < 0.5))
+        throw ValueError("slab jitter must be in [0, 0.5) spacings");
     if (!(p.poolDepthScale > 0)) throw ValueError("pool depth scale must be positive");
-    if (!(p.poolAspect >= 1 && p.poolAspect <= 1000)) throw ValueError("pool aspect must be in [1, 1000]");
+    if (!(p.poolAspect >= 1 && p.poolAspect <= 1000))
+        throw ValueError("pool aspect must be in [1, 1000]");
     if (p.droplets < 0 || p.droplets > 1000) throw ValueError("droplets must be 0..1000");
     Builder b;
     b.spacing = 2.0 * p.radius;
@@ -87,13 +102,17 @@ ParticleSet generateScene(Scene scene, const SceneParams& p)
     const double n = double(p.count);
     b.set.positions.reserve(p.count + p.count / 4 + 16);
     switch (scene) {
-    case Scene::Single: b.add(0, 0, 0); break;
+    case Scene::Single:
+        b.add(0, 0, 0);
+        break;
     case Scene::Block: {
         const int side = std::max(1, int(std::lround(std::cbrt(n))));
         addBlock(b, side, side, side, 0, 0, 0);
         break;
     }
-    case Scene::Ball: addBall(b, std::cbrt(3.0 * n / (4.0 * M_PI)), 0, 0, 0); break;
+    case Scene::Ball:
+        addBall(b, std::cbrt(3.0 * n / (4.0 * M_PI)), 0, 0, 0);
+        break;
     case Scene::Slab: {
         const int side = std::max(1, int(std::lround(std::sqrt(n / p.layers))));
         for (int k = 0; k < p.layers; ++k)
@@ -111,7 +130,8 @@ ParticleSet generateScene(Scene scene, const SceneParams& p)
         // volume, not surface: what the narrow band's scaling is measured with.
         const double aspect = p.poolAspect;
         int w = std::max(4, int(std::lround(std::cbrt(0.85 * n * aspect))));
-        if (w / aspect < 3) w = std::max(4, int(std::lround(std::sqrt(0.85 * n / 3))));  // >= 3 layers
+        if (w / aspect < 3)
+            w = std::max(4, int(std::lround(std::sqrt(0.85 * n / 3)))); // >= 3 layers
         const int d = std::max(1, int(std::lround(std::max(3.0, w / aspect) * p.poolDepthScale)));
         addBlock(b, w, w, d, 0, 0, 0);
         // Ball above the middle of the pool, 15% of the particles, a few radii of air between.
@@ -125,13 +145,15 @@ ParticleSet generateScene(Scene scene, const SceneParams& p)
         for (int i = 0; i < p.droplets; ++i) {
             const double angle = 2 * M_PI * (i + rng.uniform() * 0.5) / std::max(1, p.droplets);
             const double dist = (rho + 6 + 3 * rng.uniform()) * b.spacing;
-            b.add(c + dist * std::cos(angle), c + dist * std::sin(angle), cz + (rng.uniform() * 2 - 1) * rho * b.spacing);
+            b.add(c + dist * std::cos(angle), c + dist * std::sin(angle),
+                  cz + (rng.uniform() * 2 - 1) * rho * b.spacing);
         }
         break;
     }
     }
     std::vector<int64_t> ids(b.set.size());
-    for (size_t i = 0; i < ids.size(); ++i) ids[i] = int64_t(i);
+    for (size_t i = 0; i < ids.size(); ++i)
+        ids[i] = int64_t(i);
     b.set.addInt("id", 1, std::move(ids));
     return std::move(b.set);
 }

@@ -31,9 +31,10 @@ AtomicFile::AtomicFile(const std::string& target) : mTarget(target)
     // Hidden name in the same folder: rename() stays atomic (same file system).
     const size_t slash = target.find_last_of('/');
     const std::string base = slash == std::string::npos ? target : target.substr(slash + 1);
-    const std::string dir = slash == std::string::npos ? std::string() : target.substr(0, slash + 1);
-    mTemp = dir + "." + base + ".tmp" + std::to_string(::getpid()) + "_" +
-            std::to_string(counter++);
+    const std::string dir =
+        slash == std::string::npos ? std::string() : target.substr(0, slash + 1);
+    mTemp =
+        dir + "." + base + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
 }
 
 AtomicFile::~AtomicFile()
@@ -49,8 +50,8 @@ void AtomicFile::commit()
         ::close(fd);
     }
     if (::rename(mTemp.c_str(), mTarget.c_str()) != 0)
-        throw OutputError(mTarget + ": cannot move the finished file into place: " +
-                          std::strerror(errno));
+        throw OutputError(mTarget +
+                          ": cannot move the finished file into place: " + std::strerror(errno));
     mCommitted = true;
 }
 

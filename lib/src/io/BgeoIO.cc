@@ -43,12 +43,14 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
         if (size >= 4 && std::memcmp(data, "Bgeo", 4) == 0)
             in.failAt(4, "unsupported BGEO flavour (only classic binary 'BgeoV' version 5)");
         if (size >= 1 && data[0] == '{')
-            in.failAt(0, "this is a Houdini JSON geometry (new .bgeo/.geo); only classic BGEO v5 is supported");
+            in.failAt(0, "this is a Houdini JSON geometry (new .bgeo/.geo); only classic BGEO v5 "
+                         "is supported");
         in.failAt(0, "not a BGEO file (missing 'BgeoV' magic)");
     }
     in.skip(5, "magic");
     const int32_t version = in.read<int32_t>(true, "version");
-    if (version != 5) in.failAt(5, "unsupported BGEO version " + std::to_string(version) + " (5 expected)");
+    if (version != 5)
+        in.failAt(5, "unsupported BGEO version " + std::to_string(version) + " (5 expected)");
     int32_t counts[8];
     for (int32_t& c : counts) {
         c = in.read<int32_t>(true, "header counts");
@@ -56,8 +58,9 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
     }
     const int32_t nPoints = counts[0], nPointAttrib = counts[4];
 
-    std::vector<AttrDef> defs(size_t(in.checkedCount(uint64_t(nPointAttrib), 8, "attribute definitions")));
-    size_t valuesPerPoint = 4;  // x y z w
+    std::vector<AttrDef> defs(
+        size_t(in.checkedCount(uint64_t(nPointAttrib), 8, "attribute definitions")));
+    size_t valuesPerPoint = 4; // x y z w
     for (AttrDef& d : defs) {
         const uint16_t len = in.read<uint16_t>(true, "attribute name length");
         const uint8_t* name = in.take(len, "attribute name");
@@ -78,7 +81,8 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
                 in.fail("vector attribute '" + d.name + "' has size " + std::to_string(d.size));
             in.skip(size_t(d.size) * 4, "attribute defaults");
         } else {
-            in.fail("attribute '" + d.name + "' has unsupported Houdini type " + std::to_string(d.type));
+            in.fail("attribute '" + d.name + "' has unsupported Houdini type " +
+                    std::to_string(d.type));
         }
         valuesPerPoint += size_t(d.size);
     }
@@ -90,18 +94,23 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
     std::vector<std::vector<float>> floats(defs.size());
     std::vector<std::vector<int64_t>> ints(defs.size());
     for (size_t a = 0; a < defs.size(); ++a) {
-        if (defs[a].type == kFloat || defs[a].type == kVector) floats[a].resize(n * defs[a].size);
-        else ints[a].resize(n * defs[a].size);
+        if (defs[a].type == kFloat || defs[a].type == kVector)
+            floats[a].resize(n * defs[a].size);
+        else
+            ints[a].resize(n * defs[a].size);
     }
     for (size_t i = 0; i < n; ++i) {
-        set.positions[i] = Vec3f(loadAs<float>(p, true), loadAs<float>(p + 4, true), loadAs<float>(p + 8, true));
-        p += 16;  // w is the homogeneous coordinate, 1 for particles
+        set.positions[i] =
+            Vec3f(loadAs<float>(p, true), loadAs<float>(p + 4, true), loadAs<float>(p + 8, true));
+        p += 16; // w is the homogeneous coordinate, 1 for particles
         for (size_t a = 0; a < defs.size(); ++a) {
             const int s = defs[a].size;
             if (defs[a].type == kFloat || defs[a].type == kVector) {
-                for (int c = 0; c < s; ++c) floats[a][i * s + c] = loadAs<float>(p + 4 * c, true);
+                for (int c = 0; c < s; ++c)
+                    floats[a][i * s + c] = loadAs<float>(p + 4 * c, true);
             } else {
-                for (int c = 0; c < s; ++c) ints[a][i * s + c] = loadAs<int32_t>(p + 4 * c, true);
+                for (int c = 0; c < s; ++c)
+                    ints[a][i * s + c] = loadAs<int32_t>(p + 4 * c, true);
             }
             p += 4 * s;
         }
@@ -119,7 +128,8 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
 namespace {
 void put32(Bytes& out, uint32_t v)
 {
-    for (int s = 24; s >= 0; s -= 8) out.push_back(uint8_t(v >> s));
+    for (int s = 24; s >= 0; s -= 8)
+        out.push_back(uint8_t(v >> s));
 }
 void put16(Bytes& out, uint16_t v)
 {
@@ -140,27 +150,33 @@ Bytes encodeBgeo(const ParticleSet& ps)
     if (ps.size() > size_t(std::numeric_limits<int32_t>::max()))
         throw OutputError("BGEO v5 holds at most 2^31-1 points");
     for (const Attribute& a : ps.attributes) {
-        if (a.name.size() > 65535) throw OutputError("attribute name too long for BGEO: " + a.name.substr(0, 40));
+        if (a.name.size() > 65535)
+            throw OutputError("attribute name too long for BGEO: " + a.name.substr(0, 40));
         for (int64_t v : a.ints)
             if (v < std::numeric_limits<int32_t>::min() || v > std::numeric_limits<int32_t>::max())
-                throw OutputError("attribute '" + a.name + "' holds the value " + std::to_string(v) +
-                                  ", beyond BGEO's 32-bit integers");
+                throw OutputError("attribute '" + a.name + "' holds the value " +
+                                  std::to_string(v) + ", beyond BGEO's 32-bit integers");
     }
     Bytes out;
     size_t perPoint = 16;
-    for (const Attribute& a : ps.attributes) perPoint += 4 * size_t(a.components);
+    for (const Attribute& a : ps.attributes)
+        perPoint += 4 * size_t(a.components);
     out.reserve(64 + ps.size() * perPoint);
-    for (char c : {'B', 'g', 'e', 'o', 'V'}) out.push_back(uint8_t(c));
+    for (char c : {'B', 'g', 'e', 'o', 'V'})
+        out.push_back(uint8_t(c));
     put32(out, 5);
-    const uint32_t counts[8] = {uint32_t(ps.size()), 0, 0, 0, uint32_t(ps.attributes.size()), 0, 0, 0};
-    for (uint32_t c : counts) put32(out, c);
+    const uint32_t counts[8] = {
+        uint32_t(ps.size()), 0, 0, 0, uint32_t(ps.attributes.size()), 0, 0, 0};
+    for (uint32_t c : counts)
+        put32(out, c);
     for (const Attribute& a : ps.attributes) {
         put16(out, uint16_t(a.name.size()));
         out.insert(out.end(), a.name.begin(), a.name.end());
         put16(out, uint16_t(a.components));
         const bool isFloat = a.type == AttributeType::Float;
         put32(out, isFloat ? (a.components == 3 ? kVector : kFloat) : kInt);
-        for (int c = 0; c < a.components; ++c) put32(out, 0);  // defaults
+        for (int c = 0; c < a.components; ++c)
+            put32(out, 0); // defaults
     }
     for (size_t i = 0; i < ps.size(); ++i) {
         const Vec3f& p = ps.positions[i];
@@ -171,11 +187,12 @@ Bytes encodeBgeo(const ParticleSet& ps)
         for (const Attribute& a : ps.attributes) {
             for (int c = 0; c < a.components; ++c) {
                 const size_t k = i * a.components + c;
-                put32(out, a.type == AttributeType::Float ? bitsOf(a.floats[k]) : uint32_t(int32_t(a.ints[k])));
+                put32(out, a.type == AttributeType::Float ? bitsOf(a.floats[k])
+                                                          : uint32_t(int32_t(a.ints[k])));
             }
         }
     }
-    out.push_back(0x00);  // begin/end of the (empty) extra section, as partio writes it
+    out.push_back(0x00); // begin/end of the (empty) extra section, as partio writes it
     out.push_back(0xff);
     return out;
 }

@@ -13,8 +13,7 @@
 namespace fluidsurf {
 namespace io_internal {
 
-template <typename T>
-inline T byteSwap(T v)
+template <typename T> inline T byteSwap(T v)
 {
     static_assert(sizeof(T) == 1 || sizeof(T) == 2 || sizeof(T) == 4 || sizeof(T) == 8, "");
     if constexpr (sizeof(T) == 1) {
@@ -22,26 +21,28 @@ inline T byteSwap(T v)
     } else {
         unsigned char b[sizeof(T)];
         std::memcpy(b, &v, sizeof(T));
-        for (size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
+        for (size_t i = 0; i < sizeof(T) / 2; ++i)
+            std::swap(b[i], b[sizeof(T) - 1 - i]);
         std::memcpy(&v, b, sizeof(T));
         return v;
     }
 }
 
 /// Load a T stored with the given endianness at p (no alignment needed).
-template <typename T>
-inline T loadAs(const uint8_t* p, bool bigEndian)
+template <typename T> inline T loadAs(const uint8_t* p, bool bigEndian)
 {
     T v;
     std::memcpy(&v, p, sizeof(T));
-    return bigEndian ? byteSwap(v) : v;  // x86-64 and aarch64 hosts are little-endian
+    return bigEndian ? byteSwap(v) : v; // x86-64 and aarch64 hosts are little-endian
 }
 
 class ByteReader
 {
 public:
     ByteReader(const uint8_t* data, size_t size, std::string source)
-        : mData(data), mSize(size), mSource(std::move(source)) {}
+        : mData(data), mSize(size), mSource(std::move(source))
+    {
+    }
 
     const std::string& source() const { return mSource; }
     size_t offset() const { return mPos; }
@@ -82,8 +83,7 @@ public:
         return p;
     }
 
-    template <typename T>
-    T read(bool bigEndian, const char* what)
+    template <typename T> T read(bool bigEndian, const char* what)
     {
         return loadAs<T>(take(sizeof(T), what), bigEndian);
     }

@@ -13,14 +13,17 @@ namespace io_internal {
 
 using Bytes = std::vector<uint8_t>;
 
-ParticleSet readVtkLegacy(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
-ParticleSet readVtkXml(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+ParticleSet readVtkLegacy(const uint8_t* data, size_t size, const std::string& src,
+                          std::string* detail);
+ParticleSet readVtkXml(const uint8_t* data, size_t size, const std::string& src,
+                       std::string* detail);
 ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
-ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src,
+                          std::string* detail);
 
 Bytes encodeBgeo(const ParticleSet& particles);
 Bytes encodeVtkLegacy(const ParticleSet& particles);

@@ -19,14 +19,19 @@ std::string dictValue(const std::string& h, const std::string& key)
     int depth = 0;
     size_t e = k;
     for (; e < h.size(); ++e) {
-        if (h[e] == '(') ++depth;
-        else if (h[e] == ')') --depth;
-        else if ((h[e] == ',' || h[e] == '}') && depth == 0) break;
+        if (h[e] == '(')
+            ++depth;
+        else if (h[e] == ')')
+            --depth;
+        else if ((h[e] == ',' || h[e] == '}') && depth == 0)
+            break;
     }
     std::string v = h.substr(k, e - k);
     size_t a = 0, b = v.size();
-    while (a < b && isSpace(uint8_t(v[a]))) ++a;
-    while (b > a && isSpace(uint8_t(v[b - 1]))) --b;
+    while (a < b && isSpace(uint8_t(v[a])))
+        ++a;
+    while (b > a && isSpace(uint8_t(v[b - 1])))
+        --b;
     return v.substr(a, b - a);
 }
 } // namespace
@@ -34,12 +39,14 @@ std::string dictValue(const std::string& h, const std::string& key)
 ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
 {
     ByteReader in(data, size, src);
-    if (size < 10 || std::memcmp(data, "\x93NUMPY", 6) != 0) in.failAt(0, "not a NumPy .npy file (missing \\x93NUMPY magic)");
+    if (size < 10 || std::memcmp(data, "\x93NUMPY", 6) != 0)
+        in.failAt(0, "not a NumPy .npy file (missing \\x93NUMPY magic)");
     in.skip(6, "magic");
     const uint8_t major = *in.take(1, "version");
     in.skip(1, "version");
     if (major < 1 || major > 3) in.failAt(6, "unsupported .npy version " + std::to_string(major));
-    const size_t headerLen = major == 1 ? in.read<uint16_t>(false, "header length") : in.read<uint32_t>(false, "header length");
+    const size_t headerLen = major == 1 ? in.read<uint16_t>(false, "header length")
+                                        : in.read<uint32_t>(false, "header length");
     const uint8_t* hp = in.take(headerLen, "header");
     const std::string h(reinterpret_cast<const char*>(hp), headerLen);
     const std::string descr = dictValue(h, "descr");
@@ -47,21 +54,34 @@ ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, st
     const std::string shape = dictValue(h, "shape");
     size_t item = 0;
     bool big = false;
-    if (descr == "'<f4'" || descr == "'=f4'") item = 4;
-    else if (descr == "'<f8'" || descr == "'=f8'") item = 8;
-    else if (descr == "'>f4'") { item = 4; big = true; }
-    else if (descr == "'>f8'") { item = 8; big = true; }
-    else in.failAt(10, "unsupported dtype " + (descr.empty() ? std::string("(none)") : descr.substr(0, 20)) + " (float32 or float64 expected)");
+    if (descr == "'<f4'" || descr == "'=f4'")
+        item = 4;
+    else if (descr == "'<f8'" || descr == "'=f8'")
+        item = 8;
+    else if (descr == "'>f4'") {
+        item = 4;
+        big = true;
+    } else if (descr == "'>f8'") {
+        item = 8;
+        big = true;
+    } else
+        in.failAt(10, "unsupported dtype " +
+                          (descr.empty() ? std::string("(none)") : descr.substr(0, 20)) +
+                          " (float32 or float64 expected)");
     if (order != "False" && order != "True") in.failAt(10, "bad fortran_order in header");
     const bool fortran = order == "True";
     // shape "(N, 3)"
     std::vector<std::string> dims;
-    if (shape.size() < 2 || shape.front() != '(' || shape.back() != ')') in.failAt(10, "bad shape in header");
+    if (shape.size() < 2 || shape.front() != '(' || shape.back() != ')')
+        in.failAt(10, "bad shape in header");
     {
         std::string cur;
         for (char c : shape.substr(1, shape.size() - 2)) {
-            if (c == ',') { dims.push_back(cur); cur.clear(); }
-            else if (!isSpace(uint8_t(c))) cur += c;
+            if (c == ',') {
+                dims.push_back(cur);
+                cur.clear();
+            } else if (!isSpace(uint8_t(c)))
+                cur += c;
         }
         if (!cur.empty()) dims.push_back(cur);
     }
@@ -75,9 +95,12 @@ ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, st
     for (size_t i = 0; i < rows; ++i)
         for (int c = 0; c < 3; ++c) {
             const size_t k = fortran ? size_t(c) * rows + i : i * 3 + size_t(c);
-            set.positions[i][c] = item == 4 ? loadAs<float>(p + 4 * k, big) : float(loadAs<double>(p + 8 * k, big));
+            set.positions[i][c] =
+                item == 4 ? loadAs<float>(p + 4 * k, big) : float(loadAs<double>(p + 8 * k, big));
         }
-    if (detail) *detail = std::string(item == 4 ? "float32" : "float64") + (fortran ? ", Fortran order" : "");
+    if (detail)
+        *detail =
+            std::string(item == 4 ? "float32" : "float64") + (fortran ? ", Fortran order" : "");
     return set;
 }
 

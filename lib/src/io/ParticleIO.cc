@@ -17,7 +17,8 @@ using namespace io_internal;
 namespace {
 bool endsWith(const std::string& s, const std::string& suffix)
 {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+    return s.size() >= suffix.size() &&
+           s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 } // namespace
 
@@ -37,12 +38,16 @@ ParticleFormat formatFromPath(const std::string& path)
 
 ParticleFormat formatFromContent(const uint8_t* d, size_t n)
 {
-    auto starts = [&](const char* magic) { return n >= std::strlen(magic) && std::memcmp(d, magic, std::strlen(magic)) == 0; };
+    auto starts = [&](const char* magic) {
+        return n >= std::strlen(magic) && std::memcmp(d, magic, std::strlen(magic)) == 0;
+    };
     if (starts("# vtk DataFile")) return ParticleFormat::VtkLegacy;
-    if (starts("BgeoV") || isGzip(d, n)) return ParticleFormat::Bgeo;  // gzip: BGEO is our only gzip format
+    if (starts("BgeoV") || isGzip(d, n))
+        return ParticleFormat::Bgeo; // gzip: BGEO is our only gzip format
     if (starts("ply\n") || starts("ply\r")) return ParticleFormat::Ply;
     if (starts("\x93NUMPY")) return ParticleFormat::Npy;
-    if (n >= 4 && d[0] == 0x20 && d[1] == 0x42 && d[2] == 0x44 && d[3] == 0x56) return ParticleFormat::VdbPoints;
+    if (n >= 4 && d[0] == 0x20 && d[1] == 0x42 && d[2] == 0x44 && d[3] == 0x56)
+        return ParticleFormat::VdbPoints;
     if (starts("<?xml") || starts("<VTKFile")) return ParticleFormat::VtkXml;
     return ParticleFormat::Unknown;
 }
@@ -50,31 +55,42 @@ ParticleFormat formatFromContent(const uint8_t* d, size_t n)
 const char* formatName(ParticleFormat f)
 {
     switch (f) {
-    case ParticleFormat::VtkLegacy: return "legacy VTK";
-    case ParticleFormat::VtkXml: return "VTK XML";
-    case ParticleFormat::Bgeo: return "Houdini BGEO";
-    case ParticleFormat::Ply: return "PLY";
-    case ParticleFormat::Xyz: return "raw XYZ";
-    case ParticleFormat::Csv: return "CSV/text";
-    case ParticleFormat::Npy: return "NumPy .npy";
-    case ParticleFormat::VdbPoints: return "OpenVDB points";
-    case ParticleFormat::Unknown: break;
+    case ParticleFormat::VtkLegacy:
+        return "legacy VTK";
+    case ParticleFormat::VtkXml:
+        return "VTK XML";
+    case ParticleFormat::Bgeo:
+        return "Houdini BGEO";
+    case ParticleFormat::Ply:
+        return "PLY";
+    case ParticleFormat::Xyz:
+        return "raw XYZ";
+    case ParticleFormat::Csv:
+        return "CSV/text";
+    case ParticleFormat::Npy:
+        return "NumPy .npy";
+    case ParticleFormat::VdbPoints:
+        return "OpenVDB points";
+    case ParticleFormat::Unknown:
+        break;
     }
     return "unknown";
 }
 
 bool canWriteParticles(ParticleFormat f)
 {
-    return f == ParticleFormat::VdbPoints || f == ParticleFormat::Bgeo || f == ParticleFormat::Ply ||
-           f == ParticleFormat::Xyz || f == ParticleFormat::VtkLegacy;
+    return f == ParticleFormat::VdbPoints || f == ParticleFormat::Bgeo ||
+           f == ParticleFormat::Ply || f == ParticleFormat::Xyz || f == ParticleFormat::VtkLegacy;
 }
 
 ParticleSet readParticlesFromMemory(const uint8_t* data, size_t size, ParticleFormat format,
-                                    const std::string& source, const ReadOptions& options, ReadInfo* info)
+                                    const std::string& source, const ReadOptions& options,
+                                    ReadInfo* info)
 {
     // A headerless .xyz holding no particles is an empty file; other formats need a header.
     if (size == 0 && !(format == ParticleFormat::Xyz && options.allowEmpty))
-        throw InputError(source + ": file is empty" + (format == ParticleFormat::Xyz ? " (no particles)" : ""));
+        throw InputError(source + ": file is empty" +
+                         (format == ParticleFormat::Xyz ? " (no particles)" : ""));
     const ParticleFormat content = formatFromContent(data, size);
     if (content != ParticleFormat::Unknown && content != format &&
         !(format == ParticleFormat::VtkXml && content == ParticleFormat::VtkXml))
@@ -83,14 +99,30 @@ ParticleSet readParticlesFromMemory(const uint8_t* data, size_t size, ParticleFo
     std::string detail;
     ParticleSet set;
     switch (format) {
-    case ParticleFormat::VtkLegacy: set = readVtkLegacy(data, size, source, &detail); break;
-    case ParticleFormat::VtkXml: set = readVtkXml(data, size, source, &detail); break;
-    case ParticleFormat::Bgeo: set = readBgeo(data, size, source, &detail); break;
-    case ParticleFormat::Ply: set = readPly(data, size, source, &detail); break;
-    case ParticleFormat::Xyz: set = readXyz(data, size, source, &detail); break;
-    case ParticleFormat::Csv: set = readCsv(data, size, source, &detail); break;
-    case ParticleFormat::Npy: set = readNpy(data, size, source, &detail); break;
-    case ParticleFormat::VdbPoints: set = readVdbPoints(data, size, source, &detail); break;
+    case ParticleFormat::VtkLegacy:
+        set = readVtkLegacy(data, size, source, &detail);
+        break;
+    case ParticleFormat::VtkXml:
+        set = readVtkXml(data, size, source, &detail);
+        break;
+    case ParticleFormat::Bgeo:
+        set = readBgeo(data, size, source, &detail);
+        break;
+    case ParticleFormat::Ply:
+        set = readPly(data, size, source, &detail);
+        break;
+    case ParticleFormat::Xyz:
+        set = readXyz(data, size, source, &detail);
+        break;
+    case ParticleFormat::Csv:
+        set = readCsv(data, size, source, &detail);
+        break;
+    case ParticleFormat::Npy:
+        set = readNpy(data, size, source, &detail);
+        break;
+    case ParticleFormat::VdbPoints:
+        set = readVdbPoints(data, size, source, &detail);
+        break;
     case ParticleFormat::Unknown:
         throw InputError(source + ": unknown particle file type (extensions: .vtk .vtu .vtp .bgeo "
                                   ".bgeo.gz .ply .xyz .csv .txt .npy .vdb)");
@@ -105,7 +137,8 @@ ParticleSet readParticlesFromMemory(const uint8_t* data, size_t size, ParticleFo
         if (!set.positions[i].isFinite() && bad++ == 0) firstBad = i;
     size_t dropped = 0;
     if (bad && !options.dropNonFinite)
-        throw InputError(source + ": " + std::to_string(bad) + " particle(s) have NaN/Inf coordinates (first: particle " +
+        throw InputError(source + ": " + std::to_string(bad) +
+                         " particle(s) have NaN/Inf coordinates (first: particle " +
                          std::to_string(firstBad) + "); use --drop-nonfinite to drop them");
     if (bad) dropped = set.dropNonFinite();
     if (set.empty() && !options.allowEmpty)
@@ -130,7 +163,8 @@ ParticleSet readParticles(const std::string& path, const ReadOptions& options, R
     return readParticlesFromMemory(data.data(), data.size(), format, path, options, info);
 }
 
-void writeParticles(const ParticleSet& particles, const std::string& path, const WriteOptions& options)
+void writeParticles(const ParticleSet& particles, const std::string& path,
+                    const WriteOptions& options)
 {
     const ParticleFormat format = formatFromPath(path);
     if (!canWriteParticles(format))
@@ -144,17 +178,26 @@ void writeParticles(const ParticleSet& particles, const std::string& path, const
     Bytes bytes;
     try {
         switch (format) {
-    case ParticleFormat::VdbPoints: writeVdbPoints(particles, path, options.compress); return;
-    case ParticleFormat::Bgeo: {
-        bytes = encodeBgeo(particles);
-        const std::string p = lower(path);
-        if (endsWith(p, ".gz")) bytes = gzipCompress(bytes.data(), bytes.size());
-        break;
-    }
-    case ParticleFormat::Ply: bytes = encodePly(particles); break;
-    case ParticleFormat::Xyz: bytes = encodeXyz(particles); break;
-    case ParticleFormat::VtkLegacy: bytes = encodeVtkLegacy(particles); break;
-    default: break;
+        case ParticleFormat::VdbPoints:
+            writeVdbPoints(particles, path, options.compress);
+            return;
+        case ParticleFormat::Bgeo: {
+            bytes = encodeBgeo(particles);
+            const std::string p = lower(path);
+            if (endsWith(p, ".gz")) bytes = gzipCompress(bytes.data(), bytes.size());
+            break;
+        }
+        case ParticleFormat::Ply:
+            bytes = encodePly(particles);
+            break;
+        case ParticleFormat::Xyz:
+            bytes = encodeXyz(particles);
+            break;
+        case ParticleFormat::VtkLegacy:
+            bytes = encodeVtkLegacy(particles);
+            break;
+        default:
+            break;
         }
     } catch (const OutputError& e) {
         const std::string msg = e.what();

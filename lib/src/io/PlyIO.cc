@@ -21,15 +21,24 @@ struct PlyType
 
 bool plyType(const std::string& n, PlyType& t)
 {
-    if (n == "char" || n == "int8") t = {1, false, true};
-    else if (n == "uchar" || n == "uint8") t = {1, false, false};
-    else if (n == "short" || n == "int16") t = {2, false, true};
-    else if (n == "ushort" || n == "uint16") t = {2, false, false};
-    else if (n == "int" || n == "int32") t = {4, false, true};
-    else if (n == "uint" || n == "uint32") t = {4, false, false};
-    else if (n == "float" || n == "float32") t = {4, true, true};
-    else if (n == "double" || n == "float64") t = {8, true, true};
-    else return false;
+    if (n == "char" || n == "int8")
+        t = {1, false, true};
+    else if (n == "uchar" || n == "uint8")
+        t = {1, false, false};
+    else if (n == "short" || n == "int16")
+        t = {2, false, true};
+    else if (n == "ushort" || n == "uint16")
+        t = {2, false, false};
+    else if (n == "int" || n == "int32")
+        t = {4, false, true};
+    else if (n == "uint" || n == "uint32")
+        t = {4, false, false};
+    else if (n == "float" || n == "float32")
+        t = {4, true, true};
+    else if (n == "double" || n == "float64")
+        t = {8, true, true};
+    else
+        return false;
     return true;
 }
 
@@ -52,9 +61,12 @@ double loadNumber(const uint8_t* p, const PlyType& t, bool be)
 {
     if (t.isFloat) return t.size == 4 ? double(loadAs<float>(p, be)) : loadAs<double>(p, be);
     switch (t.size) {
-    case 1: return t.isSigned ? double(int8_t(*p)) : double(*p);
-    case 2: return t.isSigned ? double(loadAs<int16_t>(p, be)) : double(loadAs<uint16_t>(p, be));
-    default: return t.isSigned ? double(loadAs<int32_t>(p, be)) : double(loadAs<uint32_t>(p, be));
+    case 1:
+        return t.isSigned ? double(int8_t(*p)) : double(*p);
+    case 2:
+        return t.isSigned ? double(loadAs<int16_t>(p, be)) : double(loadAs<uint16_t>(p, be));
+    default:
+        return t.isSigned ? double(loadAs<int32_t>(p, be)) : double(loadAs<uint32_t>(p, be));
     }
 }
 
@@ -75,10 +87,14 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
         if (w[0] == "end_header") break;
         if (w[0] == "format") {
             if (w.size() < 3) in.fail("incomplete format line");
-            if (w[1] == "ascii") fmt = Ascii;
-            else if (w[1] == "binary_little_endian") fmt = LE;
-            else if (w[1] == "binary_big_endian") fmt = BE;
-            else in.fail("unknown PLY format '" + w[1].substr(0, 40) + "'");
+            if (w[1] == "ascii")
+                fmt = Ascii;
+            else if (w[1] == "binary_little_endian")
+                fmt = LE;
+            else if (w[1] == "binary_big_endian")
+                fmt = BE;
+            else
+                in.fail("unknown PLY format '" + w[1].substr(0, 40) + "'");
             haveFormat = true;
         } else if (w[0] == "element") {
             if (w.size() < 3) in.fail("incomplete element line");
@@ -118,47 +134,59 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
             found = true;
             int ix = -1, iy = -1, iz = -1;
             for (size_t k = 0; k < e.props.size(); ++k) {
-                if (e.props[k].isList) in.fail("list property '" + e.props[k].name + "' in vertex element");
+                if (e.props[k].isList)
+                    in.fail("list property '" + e.props[k].name + "' in vertex element");
                 if (e.props[k].name == "x") ix = int(k);
                 if (e.props[k].name == "y") iy = int(k);
                 if (e.props[k].name == "z") iz = int(k);
             }
             if (ix < 0 || iy < 0 || iz < 0) in.fail("vertex element lacks x, y, z properties");
-            const size_t n = in.checkedCount(e.count, fmt == Ascii ? 2 * e.props.size() : stride, "vertices");
+            const size_t n =
+                in.checkedCount(e.count, fmt == Ascii ? 2 * e.props.size() : stride, "vertices");
             std::vector<double> values(n * e.props.size());
             if (fmt == Ascii) {
-                for (size_t i = 0; i < values.size(); ++i) values[i] = readAsciiNumber(in, "vertex data");
+                for (size_t i = 0; i < values.size(); ++i)
+                    values[i] = readAsciiNumber(in, "vertex data");
             } else {
                 const uint8_t* p = in.take(n * stride, "vertex data");
                 for (size_t i = 0; i < n; ++i)
                     for (const PlyProperty& prop : e.props) {
-                        values[&prop - e.props.data() + i * e.props.size()] = loadNumber(p, prop.type, be);
+                        values[&prop - e.props.data() + i * e.props.size()] =
+                            loadNumber(p, prop.type, be);
                         p += prop.type.size;
                     }
             }
             const size_t np = e.props.size();
             set.positions.resize(n);
             for (size_t i = 0; i < n; ++i)
-                set.positions[i] = Vec3f(float(values[i * np + ix]), float(values[i * np + iy]), float(values[i * np + iz]));
+                set.positions[i] = Vec3f(float(values[i * np + ix]), float(values[i * np + iy]),
+                                         float(values[i * np + iz]));
             // Remaining properties, regrouping base_0..base_k-1 runs of one kind (float or int).
             std::vector<std::string> names;
-            for (const PlyProperty& prop : e.props) names.push_back(prop.name);
+            for (const PlyProperty& prop : e.props)
+                names.push_back(prop.name);
             for (size_t k = 0; k < np;) {
-                if (int(k) == ix || int(k) == iy || int(k) == iz) { ++k; continue; }
+                if (int(k) == ix || int(k) == iy || int(k) == iz) {
+                    ++k;
+                    continue;
+                }
                 std::string name;
                 size_t run = componentRun(names, k, "_", name);
                 for (size_t r = 1; r < run; ++r)
-                    if (e.props[k + r].type.isFloat != e.props[k].type.isFloat) run = 1, name = names[k];
+                    if (e.props[k + r].type.isFloat != e.props[k].type.isFloat)
+                        run = 1, name = names[k];
                 const int comps = int(run);
                 if (e.props[k].type.isFloat) {
                     std::vector<float> v(n * comps);
                     for (size_t i = 0; i < n; ++i)
-                        for (int c = 0; c < comps; ++c) v[i * comps + c] = float(values[i * np + k + c]);
+                        for (int c = 0; c < comps; ++c)
+                            v[i * comps + c] = float(values[i * np + k + c]);
                     set.addFloat(name, comps, std::move(v));
                 } else {
                     std::vector<int64_t> v(n * comps);
                     for (size_t i = 0; i < n; ++i)
-                        for (int c = 0; c < comps; ++c) v[i * comps + c] = int64_t(values[i * np + k + c]);
+                        for (int c = 0; c < comps; ++c)
+                            v[i * comps + c] = int64_t(values[i * np + k + c]);
                     set.addInt(name, comps, std::move(v));
                 }
                 k += run;
@@ -171,23 +199,31 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
             for (size_t i = 0; i < n; ++i)
                 for (const PlyProperty& p : e.props) {
                     size_t items = 1;
-                    if (p.isList) items = in.checkedCount(uint64_t(readAsciiNumber(in, "list count")), 1, "list items");
-                    for (size_t j = 0; j < items; ++j) readAsciiNumber(in, "element data");
+                    if (p.isList)
+                        items = in.checkedCount(uint64_t(readAsciiNumber(in, "list count")), 1,
+                                                "list items");
+                    for (size_t j = 0; j < items; ++j)
+                        readAsciiNumber(in, "element data");
                 }
         } else if (fixed) {
-            in.skip(in.checkedCount(e.count, std::max<size_t>(stride, 1), "elements") * stride, "element data");
+            in.skip(in.checkedCount(e.count, std::max<size_t>(stride, 1), "elements") * stride,
+                    "element data");
         } else {
             const size_t n = in.checkedCount(e.count, 1, "elements");
             for (size_t i = 0; i < n; ++i)
                 for (const PlyProperty& p : e.props) {
                     size_t items = 1;
-                    if (p.isList) items = size_t(loadNumber(in.take(p.countType.size, "list count"), p.countType, be));
-                    in.skip(in.checkedCount(items, p.type.size, "list items") * p.type.size, "element data");
+                    if (p.isList)
+                        items = size_t(
+                            loadNumber(in.take(p.countType.size, "list count"), p.countType, be));
+                    in.skip(in.checkedCount(items, p.type.size, "list items") * p.type.size,
+                            "element data");
                 }
         }
     }
     if (!found) in.fail("PLY file has no vertex element");
-    if (detail) *detail = fmt == Ascii ? "ascii" : (be ? "binary big-endian" : "binary little-endian");
+    if (detail)
+        *detail = fmt == Ascii ? "ascii" : (be ? "binary big-endian" : "binary little-endian");
     return set;
 }
 
@@ -203,7 +239,8 @@ Bytes encodePly(const ParticleSet& ps)
             throw OutputError("attribute name '" + a.name + "' cannot be stored in PLY");
         for (int64_t v : a.ints)
             if (v < std::numeric_limits<int32_t>::min() || v > std::numeric_limits<int32_t>::max())
-                throw OutputError("attribute '" + a.name + "' holds " + std::to_string(v) + ", beyond PLY's int32");
+                throw OutputError("attribute '" + a.name + "' holds " + std::to_string(v) +
+                                  ", beyond PLY's int32");
         const char* type = a.type == AttributeType::Float ? "float" : "int";
         for (int c = 0; c < a.components; ++c)
             h += std::string("property ") + type + " " +
@@ -221,8 +258,12 @@ Bytes encodePly(const ParticleSet& ps)
         for (const Attribute& a : ps.attributes)
             for (int c = 0; c < a.components; ++c, p += 4) {
                 const size_t k = i * a.components + c;
-                if (a.type == AttributeType::Float) std::memcpy(p, &a.floats[k], 4);
-                else { const int32_t v = int32_t(a.ints[k]); std::memcpy(p, &v, 4); }
+                if (a.type == AttributeType::Float)
+                    std::memcpy(p, &a.floats[k], 4);
+                else {
+                    const int32_t v = int32_t(a.ints[k]);
+                    std::memcpy(p, &v, 4);
+                }
             }
     }
     return out;

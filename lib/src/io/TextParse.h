@@ -11,7 +11,10 @@
 namespace fluidsurf {
 namespace io_internal {
 
-inline bool isSpace(uint8_t c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; }
+inline bool isSpace(uint8_t c)
+{
+    return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v';
+}
 
 /// Split a line at whitespace.
 inline std::vector<std::string> splitWords(const std::string& line)
@@ -19,9 +22,11 @@ inline std::vector<std::string> splitWords(const std::string& line)
     std::vector<std::string> words;
     size_t i = 0;
     while (i < line.size()) {
-        while (i < line.size() && isSpace(uint8_t(line[i]))) ++i;
+        while (i < line.size() && isSpace(uint8_t(line[i])))
+            ++i;
         size_t j = i;
-        while (j < line.size() && !isSpace(uint8_t(line[j]))) ++j;
+        while (j < line.size() && !isSpace(uint8_t(line[j])))
+            ++j;
         if (j > i) words.emplace_back(line.substr(i, j - i));
         i = j;
     }
@@ -33,9 +38,11 @@ inline bool nextToken(ByteReader& in, const char*& begin, const char*& end)
 {
     const uint8_t* d = in.data();
     size_t p = in.offset(), n = in.size();
-    while (p < n && isSpace(d[p])) ++p;
+    while (p < n && isSpace(d[p]))
+        ++p;
     size_t q = p;
-    while (q < n && !isSpace(d[q])) ++q;
+    while (q < n && !isSpace(d[q]))
+        ++q;
     in.seek(q);
     begin = reinterpret_cast<const char*>(d + p);
     end = reinterpret_cast<const char*>(d + q);
@@ -73,15 +80,16 @@ inline uint64_t parseCount(const ByteReader& in, const std::string& word, const 
 
 inline std::string lower(std::string s)
 {
-    for (char& c : s) c = char(std::tolower(uint8_t(c)));
+    for (char& c : s)
+        c = char(std::tolower(uint8_t(c)));
     return s;
 }
 
 /// Columns/properties named base<sep>0, base<sep>1, ... (sep one of separators) form one vector
 /// attribute. Returns how many names from names[first] on form such a run (1 when none; a run of
 /// one is not regrouped), and its base name.
-inline size_t componentRun(const std::vector<std::string>& names, size_t first, const char* separators,
-                           std::string& base)
+inline size_t componentRun(const std::vector<std::string>& names, size_t first,
+                           const char* separators, std::string& base)
 {
     auto split = [&](const std::string& n, std::string& b, int& index) {
         const size_t s = n.find_last_of(separators);
@@ -99,7 +107,8 @@ inline size_t componentRun(const std::vector<std::string>& names, size_t first, 
     int index = 0;
     if (!split(names[first], b, index) || index != 0) return 1;
     size_t run = 1;
-    while (first + run < names.size() && split(names[first + run], other, index) && other == b && index == int(run))
+    while (first + run < names.size() && split(names[first + run], other, index) && other == b &&
+           index == int(run))
         ++run;
     if (run > 1) base = b;
     return run;

@@ -6,8 +6,8 @@
 // in double reproduces the original float exactly. Point order is not part of a VDB (points
 // are bucketed by voxel), so a round trip keeps each particle, not their order.
 #include "io/ByteReader.h"
-#include "io/VdbGrids.h"
 #include "io/Formats.h"
+#include "io/VdbGrids.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/io/AtomicFile.h>
@@ -36,7 +36,10 @@ struct MemoryBuf : std::streambuf
     }
     pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override
     {
-        char* target = (dir == std::ios_base::beg ? eback() : dir == std::ios_base::cur ? gptr() : egptr()) + off;
+        char* target = (dir == std::ios_base::beg   ? eback()
+                        : dir == std::ios_base::cur ? gptr()
+                                                    : egptr()) +
+                       off;
         if (target < eback() || target > egptr()) return pos_type(off_type(-1));
         setg(eback(), target, egptr());
         return pos_type(target - eback());
@@ -48,10 +51,12 @@ struct MemoryBuf : std::streambuf
 };
 
 template <typename T>
-void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx, int stride, T* out)
+void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx, int stride,
+                T* out)
 {
     openvdb::points::AttributeHandle<T> h(array);
-    for (int c = 0; c < stride; ++c) out[c] = h.get(idx, openvdb::Index(c));
+    for (int c = 0; c < stride; ++c)
+        out[c] = h.get(idx, openvdb::Index(c));
 }
 
 /// OpenVDB's reader trusts the file: on a truncated file it sizes allocations from whatever
@@ -97,8 +102,9 @@ void checkVdbGrid(ByteReader& in, const std::string& gridType)
         in.fail("corrupt transform type '" + map.substr(0, 40) + "'");
     // Serialized sizes of the fixed-size maps (their read() in openvdb/math/Maps.h).
     static const std::pair<const char*, size_t> kMapBytes[] = {
-        {"UniformScaleMap", 120}, {"ScaleMap", 120}, {"UniformScaleTranslateMap", 144},
-        {"ScaleTranslateMap", 144}, {"TranslationMap", 24}, {"AffineMap", 128}, {"UnitaryMap", 128}};
+        {"UniformScaleMap", 120},   {"ScaleMap", 120},      {"UniformScaleTranslateMap", 144},
+        {"ScaleTranslateMap", 144}, {"TranslationMap", 24}, {"AffineMap", 128},
+        {"UnitaryMap", 128}};
     size_t mapBytes = 0;
     for (const auto& [name, bytes] : kMapBytes)
         if (map == name) mapBytes = bytes;
@@ -111,8 +117,8 @@ void checkVdbGrid(ByteReader& in, const std::string& gridType)
     const uint64_t children = in.read<uint32_t>(false, "root child count");
     // a tile is 17 bytes; a child at least its origin and two 32^3-bit masks
     if (tiles * 17 + children * (12 + 2 * 4096) > in.remaining())
-        in.fail("corrupt root node: " + std::to_string(tiles) + " tiles and " + std::to_string(children) +
-                " children do not fit in the grid");
+        in.fail("corrupt root node: " + std::to_string(tiles) + " tiles and " +
+                std::to_string(children) + " children do not fit in the grid");
 }
 
 void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
@@ -121,14 +127,16 @@ void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
     in.skip(8, "VDB magic");
     const uint32_t version = in.read<uint32_t>(false, "file version");
     if (version < 222 || version > 1000)
-        in.failAt(8, "unsupported VDB file version " + std::to_string(version) + " (222 or newer expected)");
+        in.failAt(8, "unsupported VDB file version " + std::to_string(version) +
+                         " (222 or newer expected)");
     in.skip(8, "library version");
     const bool hasOffsets = *in.take(1, "grid offsets flag") != 0;
     in.skip(36, "UUID");
     skipVdbMetaMap(in, "file metadata count");
     if (!hasOffsets) return;
     const int32_t grids = in.read<int32_t>(false, "grid count");
-    if (grids < 0 || size_t(grids) > in.remaining() / 36) in.fail("corrupt grid count " + std::to_string(grids));
+    if (grids < 0 || size_t(grids) > in.remaining() / 36)
+        in.fail("corrupt grid count " + std::to_string(grids));
     for (int32_t g = 0; g < grids; ++g) {
         readVdbString(in, "grid name");
         const std::string gridType = readVdbString(in, "grid type");
@@ -139,8 +147,8 @@ void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
         if (!(gridPos > 0 && gridPos <= blockPos && blockPos <= endPos))
             in.fail("corrupt grid offsets in descriptor " + std::to_string(g));
         if (uint64_t(endPos) > size)
-            in.fail("grid " + std::to_string(g) + " ends at byte " + std::to_string(endPos) + " but the file has " +
-                    std::to_string(size) + " bytes (truncated file?)");
+            in.fail("grid " + std::to_string(g) + " ends at byte " + std::to_string(endPos) +
+                    " but the file has " + std::to_string(size) + " bytes (truncated file?)");
         ByteReader grid(data, size_t(endPos), src);
         grid.seek(size_t(gridPos));
         checkVdbGrid(grid, gridType);
@@ -178,7 +186,8 @@ openvdb::GridPtrVecPtr readVdbGrids(const uint8_t* data, size_t size, const std:
     }
 }
 
-ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src,
+                          std::string* detail)
 {
     const openvdb::GridPtrVecPtr grids = readVdbGrids(data, size, src);
     openvdb::points::PointDataGrid::Ptr grid;
@@ -188,7 +197,8 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
         auto pg = openvdb::gridPtrCast<openvdb::points::PointDataGrid>(g);
         if (!pg || grid) continue;
         auto leaf = pg->tree().cbeginLeaf();
-        if (!leaf || leaf->attributeSet().find("P") != openvdb::points::AttributeSet::INVALID_POS) grid = pg;
+        if (!leaf || leaf->attributeSet().find("P") != openvdb::points::AttributeSet::INVALID_POS)
+            grid = pg;
     }
     if (!grid)
         throw InputError(src + ": no PointDataGrid with a \"P\" attribute in this VDB (grids: " +
@@ -202,7 +212,13 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
         return set;
     }
     // Attribute layout from the first leaf's descriptor (shared by all leaves).
-    struct Column { std::string name; size_t pos; int stride; enum { F, F3, D, D3, I32, I64, I3 } kind; };
+    struct Column
+    {
+        std::string name;
+        size_t pos;
+        int stride;
+        enum { F, F3, D, D3, I32, I64, I3 } kind;
+    };
     std::vector<Column> columns;
     std::string skipped;
     const auto& desc = first->attributeSet().descriptor();
@@ -211,14 +227,24 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
         const auto& type = desc.type(pos).first;
         const int stride = int(first->constAttributeArray(pos).stride());
         Column c{name, pos, stride, Column::F};
-        if (type == "float") c.kind = Column::F;
-        else if (type == "vec3s") c.kind = Column::F3;
-        else if (type == "double") c.kind = Column::D;
-        else if (type == "vec3d") c.kind = Column::D3;
-        else if (type == "int32") c.kind = Column::I32;
-        else if (type == "int64") c.kind = Column::I64;
-        else if (type == "vec3i") c.kind = Column::I3;
-        else { skipped += (skipped.empty() ? "" : ", ") + name + " (" + type + ")"; continue; }
+        if (type == "float")
+            c.kind = Column::F;
+        else if (type == "vec3s")
+            c.kind = Column::F3;
+        else if (type == "double")
+            c.kind = Column::D;
+        else if (type == "vec3d")
+            c.kind = Column::D3;
+        else if (type == "int32")
+            c.kind = Column::I32;
+        else if (type == "int64")
+            c.kind = Column::I64;
+        else if (type == "vec3i")
+            c.kind = Column::I3;
+        else {
+            skipped += (skipped.empty() ? "" : ", ") + name + " (" + type + ")";
+            continue;
+        }
         columns.push_back(c);
     }
     const size_t posIndex = desc.find("P");
@@ -227,11 +253,15 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
     std::vector<std::vector<float>> fcols(columns.size());
     std::vector<std::vector<int64_t>> icols(columns.size());
     auto isFloat = [](const Column& c) { return c.kind <= Column::D3; };
-    auto comps = [](const Column& c) { return (c.kind == Column::F3 || c.kind == Column::D3 || c.kind == Column::I3) ? 3 * c.stride : c.stride; };
+    auto comps = [](const Column& c) {
+        return (c.kind == Column::F3 || c.kind == Column::D3 || c.kind == Column::I3) ? 3 * c.stride
+                                                                                      : c.stride;
+    };
 
     for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
         if (leaf->attributeSet().descriptor().map() != desc.map())
-            throw InputError(src + ": leaves of grid '" + grid->getName() + "' carry different attributes");
+            throw InputError(src + ": leaves of grid '" + grid->getName() +
+                             "' carry different attributes");
         openvdb::points::AttributeHandle<openvdb::Vec3f> ph(leaf->constAttributeArray(posIndex));
         for (auto idx = leaf->beginIndexAll(); idx; ++idx) {
             const openvdb::Vec3d voxel = idx.getCoord().asVec3d();
@@ -244,40 +274,49 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
                 if (isFloat(c)) {
                     fcols[k].resize(fcols[k].size() + n);
                     float* o = &fcols[k][fcols[k].size() - n];
-                    if (c.kind == Column::F) copyValues<float>(array, *idx, c.stride, o);
+                    if (c.kind == Column::F)
+                        copyValues<float>(array, *idx, c.stride, o);
                     else if (c.kind == Column::D) {
                         std::vector<double> t(n);
                         copyValues<double>(array, *idx, c.stride, t.data());
-                        for (int j = 0; j < n; ++j) o[j] = float(t[j]);
+                        for (int j = 0; j < n; ++j)
+                            o[j] = float(t[j]);
                     } else if (c.kind == Column::F3) {
                         std::vector<openvdb::Vec3f> t(c.stride);
                         copyValues<openvdb::Vec3f>(array, *idx, c.stride, t.data());
-                        for (int j = 0; j < n; ++j) o[j] = t[j / 3][j % 3];
+                        for (int j = 0; j < n; ++j)
+                            o[j] = t[j / 3][j % 3];
                     } else {
                         std::vector<openvdb::Vec3d> t(c.stride);
                         copyValues<openvdb::Vec3d>(array, *idx, c.stride, t.data());
-                        for (int j = 0; j < n; ++j) o[j] = float(t[j / 3][j % 3]);
+                        for (int j = 0; j < n; ++j)
+                            o[j] = float(t[j / 3][j % 3]);
                     }
                 } else {
                     icols[k].resize(icols[k].size() + n);
                     int64_t* o = &icols[k][icols[k].size() - n];
-                    if (c.kind == Column::I64) copyValues<int64_t>(array, *idx, c.stride, o);
+                    if (c.kind == Column::I64)
+                        copyValues<int64_t>(array, *idx, c.stride, o);
                     else if (c.kind == Column::I32) {
                         std::vector<int32_t> t(n);
                         copyValues<int32_t>(array, *idx, c.stride, t.data());
-                        for (int j = 0; j < n; ++j) o[j] = t[j];
+                        for (int j = 0; j < n; ++j)
+                            o[j] = t[j];
                     } else {
                         std::vector<openvdb::Vec3i> t(c.stride);
                         copyValues<openvdb::Vec3i>(array, *idx, c.stride, t.data());
-                        for (int j = 0; j < n; ++j) o[j] = t[j / 3][j % 3];
+                        for (int j = 0; j < n; ++j)
+                            o[j] = t[j / 3][j % 3];
                     }
                 }
             }
         }
     }
     for (size_t k = 0; k < columns.size(); ++k) {
-        if (isFloat(columns[k])) set.addFloat(columns[k].name, comps(columns[k]), std::move(fcols[k]));
-        else set.addInt(columns[k].name, comps(columns[k]), std::move(icols[k]));
+        if (isFloat(columns[k]))
+            set.addFloat(columns[k].name, comps(columns[k]), std::move(fcols[k]));
+        else
+            set.addInt(columns[k].name, comps(columns[k]), std::move(icols[k]));
     }
     if (detail) {
         *detail = "grid '" + grid->getName() + "', voxel " + std::to_string(xform.voxelSize()[0]);
@@ -293,14 +332,16 @@ void writeVdbPoints(const ParticleSet& ps, const std::string& path, bool compres
     using VdbVec3f = openvdb::Vec3f;
     ps.validate();
     size_t bad = 0;
-    for (const Vec3f& p : ps.positions) bad += !p.isFinite();
+    for (const Vec3f& p : ps.positions)
+        bad += !p.isFinite();
     if (bad)
         throw OutputError(path + ": " + std::to_string(bad) +
                           " particle(s) have NaN/Inf positions, which VDB points cannot store");
     vdb::initialize();
     std::vector<VdbVec3f> positions;
     positions.reserve(ps.size());
-    for (const Vec3f& p : ps.positions) positions.emplace_back(p.x, p.y, p.z);
+    for (const Vec3f& p : ps.positions)
+        positions.emplace_back(p.x, p.y, p.z);
     points::PointAttributeVector<VdbVec3f> wrapper(positions);
     // About 8 points per voxel, rounded down to a power of two (see the header comment).
     double voxel = ps.size() > 1 ? double(points::computeVoxelSize(wrapper, 8)) : 1.0;
@@ -309,25 +350,35 @@ void writeVdbPoints(const ParticleSet& ps, const std::string& path, bool compres
     // Keep index coordinates inside VDB's int32 range.
     const BBox3f box = ps.bbox();
     for (int a = 0; a < 3 && !box.empty(); ++a)
-        while (std::max(std::fabs(box.min[a]), std::fabs(box.max[a])) / voxel > 1e9) voxel *= 2;
+        while (std::max(std::fabs(box.min[a]), std::fabs(box.max[a])) / voxel > 1e9)
+            voxel *= 2;
     auto xform = vdb::math::Transform::createLinearTransform(voxel);
     auto indexGrid = vdb::tools::createPointIndexGrid<vdb::tools::PointIndexGrid>(wrapper, *xform);
-    auto grid = points::createPointDataGrid<points::NullCodec, points::PointDataGrid>(*indexGrid, wrapper, *xform);
+    auto grid = points::createPointDataGrid<points::NullCodec, points::PointDataGrid>(
+        *indexGrid, wrapper, *xform);
     for (const Attribute& a : ps.attributes) {
-        if (a.name == "P") throw OutputError(path + ": attribute named \"P\" clashes with VDB positions");
+        if (a.name == "P")
+            throw OutputError(path + ": attribute named \"P\" clashes with VDB positions");
         if (a.type == AttributeType::Float && a.components == 3) {
             std::vector<VdbVec3f> v(ps.size());
-            for (size_t i = 0; i < v.size(); ++i) v[i] = VdbVec3f(&a.floats[3 * i]);
+            for (size_t i = 0; i < v.size(); ++i)
+                v[i] = VdbVec3f(&a.floats[3 * i]);
             points::appendAttribute<VdbVec3f>(grid->tree(), a.name);
-            points::populateAttribute(grid->tree(), indexGrid->tree(), a.name, points::PointAttributeVector<VdbVec3f>(v));
+            points::populateAttribute(grid->tree(), indexGrid->tree(), a.name,
+                                      points::PointAttributeVector<VdbVec3f>(v));
         } else if (a.type == AttributeType::Float) {
             points::appendAttribute<float>(grid->tree(), a.name, 0.f, vdb::Index(a.components));
-            points::populateAttribute(grid->tree(), indexGrid->tree(), a.name,
-                                      points::PointAttributeVector<float>(a.floats, vdb::Index(a.components)), vdb::Index(a.components));
+            points::populateAttribute(
+                grid->tree(), indexGrid->tree(), a.name,
+                points::PointAttributeVector<float>(a.floats, vdb::Index(a.components)),
+                vdb::Index(a.components));
         } else {
-            points::appendAttribute<int64_t>(grid->tree(), a.name, int64_t(0), vdb::Index(a.components));
-            points::populateAttribute(grid->tree(), indexGrid->tree(), a.name,
-                                      points::PointAttributeVector<int64_t>(a.ints, vdb::Index(a.components)), vdb::Index(a.components));
+            points::appendAttribute<int64_t>(grid->tree(), a.name, int64_t(0),
+                                             vdb::Index(a.components));
+            points::populateAttribute(
+                grid->tree(), indexGrid->tree(), a.name,
+                points::PointAttributeVector<int64_t>(a.ints, vdb::Index(a.components)),
+                vdb::Index(a.components));
         }
     }
     grid->setName("points");

@@ -17,53 +17,82 @@ enum class VtkType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, F
 bool vtkTypeFromName(const std::string& name, VtkType& t)
 {
     const std::string n = lower(name);
-    if (n == "char") t = VtkType::Int8;
-    else if (n == "unsigned_char") t = VtkType::UInt8;
-    else if (n == "short") t = VtkType::Int16;
-    else if (n == "unsigned_short") t = VtkType::UInt16;
-    else if (n == "int" || n == "vtkidtype") t = VtkType::Int32;
-    else if (n == "unsigned_int") t = VtkType::UInt32;
-    else if (n == "long" || n == "vtktypeint64") t = VtkType::Int64;
-    else if (n == "unsigned_long" || n == "vtktypeuint64") t = VtkType::UInt64;
-    else if (n == "float") t = VtkType::Float32;
-    else if (n == "double") t = VtkType::Float64;
-    else return false;
+    if (n == "char")
+        t = VtkType::Int8;
+    else if (n == "unsigned_char")
+        t = VtkType::UInt8;
+    else if (n == "short")
+        t = VtkType::Int16;
+    else if (n == "unsigned_short")
+        t = VtkType::UInt16;
+    else if (n == "int" || n == "vtkidtype")
+        t = VtkType::Int32;
+    else if (n == "unsigned_int")
+        t = VtkType::UInt32;
+    else if (n == "long" || n == "vtktypeint64")
+        t = VtkType::Int64;
+    else if (n == "unsigned_long" || n == "vtktypeuint64")
+        t = VtkType::UInt64;
+    else if (n == "float")
+        t = VtkType::Float32;
+    else if (n == "double")
+        t = VtkType::Float64;
+    else
+        return false;
     return true;
 }
 
 size_t vtkTypeSize(VtkType t)
 {
     switch (t) {
-    case VtkType::Int8: case VtkType::UInt8: return 1;
-    case VtkType::Int16: case VtkType::UInt16: return 2;
-    case VtkType::Int32: case VtkType::UInt32: case VtkType::Float32: return 4;
-    default: return 8;
+    case VtkType::Int8:
+    case VtkType::UInt8:
+        return 1;
+    case VtkType::Int16:
+    case VtkType::UInt16:
+        return 2;
+    case VtkType::Int32:
+    case VtkType::UInt32:
+    case VtkType::Float32:
+        return 4;
+    default:
+        return 8;
     }
 }
 
-bool isFloatType(VtkType t) { return t == VtkType::Float32 || t == VtkType::Float64; }
+bool isFloatType(VtkType t)
+{
+    return t == VtkType::Float32 || t == VtkType::Float64;
+}
 
 class VtkLegacyParser
 {
 public:
-    VtkLegacyParser(const uint8_t* data, size_t size, const std::string& src) : in(data, size, src) {}
+    VtkLegacyParser(const uint8_t* data, size_t size, const std::string& src) : in(data, size, src)
+    {
+    }
 
     ParticleSet parse(std::string* detail)
     {
         const std::string magic = in.line("the header", 256);
         if (magic.rfind("# vtk DataFile Version", 0) != 0)
-            in.failAt(0, "not a legacy VTK file (first line must start with '# vtk DataFile Version')");
+            in.failAt(
+                0, "not a legacy VTK file (first line must start with '# vtk DataFile Version')");
         in.line("the title line", 1 << 16);
         const std::string mode = lower(nextLine("the ASCII/BINARY line")[0]);
-        if (mode == "ascii") mBinary = false;
-        else if (mode == "binary") mBinary = true;
-        else fail("expected ASCII or BINARY, found '" + mode.substr(0, 40) + "'");
+        if (mode == "ascii")
+            mBinary = false;
+        else if (mode == "binary")
+            mBinary = true;
+        else
+            fail("expected ASCII or BINARY, found '" + mode.substr(0, 40) + "'");
 
         auto words = nextLine("DATASET");
         if (words.size() < 2 || lower(words[0]) != "dataset") fail("expected DATASET");
         const std::string dataset = lower(words[1]);
         if (dataset != "polydata" && dataset != "unstructured_grid")
-            fail("DATASET " + words[1] + " is not a point set (POLYDATA or UNSTRUCTURED_GRID expected)");
+            fail("DATASET " + words[1] +
+                 " is not a point set (POLYDATA or UNSTRUCTURED_GRID expected)");
         if (detail) *detail = std::string(mBinary ? "BINARY " : "ASCII ") + words[1];
 
         bool havePoints = false;
@@ -81,13 +110,15 @@ public:
                 skipCells(w);
             } else if (key == "cell_types") {
                 need(w, 2);
-                skipValues(mulChecked(in, parseCount(in, w[1], "CELL_TYPES count"), 1, "CELL_TYPES"),
-                           VtkType::Int32, "CELL_TYPES");
+                skipValues(
+                    mulChecked(in, parseCount(in, w[1], "CELL_TYPES count"), 1, "CELL_TYPES"),
+                    VtkType::Int32, "CELL_TYPES");
             } else if (key == "point_data") {
                 need(w, 2);
                 if (!havePoints) fail("POINT_DATA before POINTS");
                 if (parseCount(in, w[1], "POINT_DATA count") != mSet.size())
-                    fail("POINT_DATA " + w[1] + " does not match POINTS " + std::to_string(mSet.size()));
+                    fail("POINT_DATA " + w[1] + " does not match POINTS " +
+                         std::to_string(mSet.size()));
                 scope = Points;
             } else if (key == "cell_data") {
                 need(w, 2);
@@ -154,7 +185,7 @@ private:
             out.resize(n);
             convertBinary(p, n, t, out.data());
         } else {
-            const size_t n = in.checkedCount(count, 1, what);  // >= 1 byte per ASCII value
+            const size_t n = in.checkedCount(count, 1, what); // >= 1 byte per ASCII value
             out.resize(n);
             for (size_t i = 0; i < n; ++i) {
                 const double v = readAsciiNumber(in, what);
@@ -173,16 +204,36 @@ private:
         const size_t s = vtkTypeSize(t);
         for (size_t i = 0; i < n; ++i, p += s) {
             switch (t) {
-            case VtkType::Int8: out[i] = Out(int8_t(*p)); break;
-            case VtkType::UInt8: out[i] = Out(*p); break;
-            case VtkType::Int16: out[i] = Out(loadAs<int16_t>(p, true)); break;
-            case VtkType::UInt16: out[i] = Out(loadAs<uint16_t>(p, true)); break;
-            case VtkType::Int32: out[i] = Out(loadAs<int32_t>(p, true)); break;
-            case VtkType::UInt32: out[i] = Out(loadAs<uint32_t>(p, true)); break;
-            case VtkType::Int64: out[i] = Out(loadAs<int64_t>(p, true)); break;
-            case VtkType::UInt64: out[i] = Out(loadAs<uint64_t>(p, true)); break;
-            case VtkType::Float32: out[i] = Out(loadAs<float>(p, true)); break;
-            case VtkType::Float64: out[i] = Out(loadAs<double>(p, true)); break;
+            case VtkType::Int8:
+                out[i] = Out(int8_t(*p));
+                break;
+            case VtkType::UInt8:
+                out[i] = Out(*p);
+                break;
+            case VtkType::Int16:
+                out[i] = Out(loadAs<int16_t>(p, true));
+                break;
+            case VtkType::UInt16:
+                out[i] = Out(loadAs<uint16_t>(p, true));
+                break;
+            case VtkType::Int32:
+                out[i] = Out(loadAs<int32_t>(p, true));
+                break;
+            case VtkType::UInt32:
+                out[i] = Out(loadAs<uint32_t>(p, true));
+                break;
+            case VtkType::Int64:
+                out[i] = Out(loadAs<int64_t>(p, true));
+                break;
+            case VtkType::UInt64:
+                out[i] = Out(loadAs<uint64_t>(p, true));
+                break;
+            case VtkType::Float32:
+                out[i] = Out(loadAs<float>(p, true));
+                break;
+            case VtkType::Float64:
+                out[i] = Out(loadAs<double>(p, true));
+                break;
             }
         }
     }
@@ -193,7 +244,8 @@ private:
             in.skip(in.checkedCount(count, vtkTypeSize(t), what) * vtkTypeSize(t), what);
         } else {
             const size_t n = in.checkedCount(count, 1, what);
-            for (size_t i = 0; i < n; ++i) readAsciiNumber(in, what);
+            for (size_t i = 0; i < n; ++i)
+                readAsciiNumber(in, what);
         }
     }
 
@@ -209,13 +261,15 @@ private:
             const uint8_t* p = in.take(count * 12, "points");
             mSet.positions.resize(count);
             float* out = &mSet.positions[0].x;
-            for (size_t i = 0; i < count * 3; ++i) out[i] = loadAs<float>(p + 4 * i, true);
+            for (size_t i = 0; i < count * 3; ++i)
+                out[i] = loadAs<float>(p + 4 * i, true);
         } else {
             std::vector<double> v;
             readValues(values, t, "points", v);
             mSet.positions.resize(size_t(n));
             for (size_t i = 0; i < size_t(n); ++i)
-                mSet.positions[i] = Vec3f(float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2]));
+                mSet.positions[i] =
+                    Vec3f(float(v[3 * i]), float(v[3 * i + 1]), float(v[3 * i + 2]));
         }
         skipMetadataIfPresent();
     }
@@ -253,8 +307,10 @@ private:
     {
         const size_t mark = in.offset();
         std::vector<std::string> w;
-        if (nextLineOrEnd(w) && lower(w[0]) == "metadata") skipMetadata();
-        else in.seek(mark);
+        if (nextLineOrEnd(w) && lower(w[0]) == "metadata")
+            skipMetadata();
+        else
+            in.seek(mark);
     }
 
     void storeArray(const std::string& name, int comps, VtkType t, uint64_t tuples, bool keep,
@@ -302,8 +358,8 @@ private:
             need(w, 3);
             const uint64_t comps = parseCount(in, w[2], "color components");
             if (comps < 1 || comps > 16) fail("bad COLOR_SCALARS component count");
-            storeArray(w[1], int(comps), mBinary ? VtkType::UInt8 : VtkType::Float32, tuples,
-                       false, "COLOR_SCALARS data");
+            storeArray(w[1], int(comps), mBinary ? VtkType::UInt8 : VtkType::Float32, tuples, false,
+                       "COLOR_SCALARS data");
         } else if (key == "lookup_table") {
             need(w, 3);
             const uint64_t n = parseCount(in, w[2], "LOOKUP_TABLE size");
@@ -314,11 +370,16 @@ private:
             const uint64_t arrays = parseCount(in, w[2], "FIELD array count");
             for (uint64_t a = 0; a < arrays; ++a) {
                 auto f = nextLine("FIELD array header");
-                if (lower(f[0]) == "metadata") { skipMetadata(); --a; continue; }
+                if (lower(f[0]) == "metadata") {
+                    skipMetadata();
+                    --a;
+                    continue;
+                }
                 if (f.size() < 4) fail("incomplete FIELD array header");
                 const uint64_t comps = parseCount(in, f[1], "FIELD components");
                 const uint64_t n = parseCount(in, f[2], "FIELD tuples");
-                if (comps < 1 || comps > 16) fail("FIELD array '" + f[0] + "' has " + f[1] + " components");
+                if (comps < 1 || comps > 16)
+                    fail("FIELD array '" + f[0] + "' has " + f[1] + " components");
                 if (keep && n != tuples)
                     fail("FIELD array '" + f[0] + "' has " + f[2] + " tuples for " +
                          std::to_string(tuples) + " points");
@@ -330,7 +391,8 @@ private:
 
 } // namespace
 
-ParticleSet readVtkLegacy(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+ParticleSet readVtkLegacy(const uint8_t* data, size_t size, const std::string& src,
+                          std::string* detail)
 {
     return VtkLegacyParser(data, size, src).parse(detail);
 }
@@ -339,15 +401,20 @@ namespace {
 void putBE(Bytes& out, const void* v, size_t n)
 {
     const uint8_t* c = static_cast<const uint8_t*>(v);
-    for (size_t i = 0; i < n; ++i) out.push_back(c[n - 1 - i]);
+    for (size_t i = 0; i < n; ++i)
+        out.push_back(c[n - 1 - i]);
 }
-void putText(Bytes& out, const std::string& s) { out.insert(out.end(), s.begin(), s.end()); }
+void putText(Bytes& out, const std::string& s)
+{
+    out.insert(out.end(), s.begin(), s.end());
+}
 } // namespace
 
 Bytes encodeVtkLegacy(const ParticleSet& ps)
 {
     ps.validate();
-    if (ps.size() > size_t(INT32_MAX / 2)) throw OutputError("too many particles for legacy VTK's int32 cells");
+    if (ps.size() > size_t(INT32_MAX / 2))
+        throw OutputError("too many particles for legacy VTK's int32 cells");
     Bytes out;
     size_t perPoint = 20;
     for (const Attribute& a : ps.attributes) {
@@ -356,10 +423,13 @@ Bytes encodeVtkLegacy(const ParticleSet& ps)
         perPoint += 8 * size_t(a.components);
     }
     out.reserve(256 + ps.size() * perPoint);
-    putText(out, "# vtk DataFile Version 4.2\nfluidsurf particles\nBINARY\nDATASET POLYDATA\nPOINTS " +
-                     std::to_string(ps.size()) + " float\n");
-    for (const Vec3f& p : ps.positions) putBE(out, &p.x, 4), putBE(out, &p.y, 4), putBE(out, &p.z, 4);
-    putText(out, "\nVERTICES " + std::to_string(ps.size()) + " " + std::to_string(2 * ps.size()) + "\n");
+    putText(out,
+            "# vtk DataFile Version 4.2\nfluidsurf particles\nBINARY\nDATASET POLYDATA\nPOINTS " +
+                std::to_string(ps.size()) + " float\n");
+    for (const Vec3f& p : ps.positions)
+        putBE(out, &p.x, 4), putBE(out, &p.y, 4), putBE(out, &p.z, 4);
+    putText(out,
+            "\nVERTICES " + std::to_string(ps.size()) + " " + std::to_string(2 * ps.size()) + "\n");
     for (size_t i = 0; i < ps.size(); ++i) {
         const int32_t one = 1, idx = int32_t(i);
         putBE(out, &one, 4);
@@ -371,15 +441,23 @@ Bytes encodeVtkLegacy(const ParticleSet& ps)
                      std::to_string(ps.attributes.size()) + "\n");
     for (const Attribute& a : ps.attributes) {
         bool wide = false;
-        for (int64_t v : a.ints) wide = wide || v < INT32_MIN || v > INT32_MAX;
-        const char* type = a.type == AttributeType::Float ? "float" : (wide ? "vtktypeint64" : "int");
-        putText(out, a.name + " " + std::to_string(a.components) + " " + std::to_string(ps.size()) + " " + type + "\n");
+        for (int64_t v : a.ints)
+            wide = wide || v < INT32_MIN || v > INT32_MAX;
+        const char* type =
+            a.type == AttributeType::Float ? "float" : (wide ? "vtktypeint64" : "int");
+        putText(out, a.name + " " + std::to_string(a.components) + " " + std::to_string(ps.size()) +
+                         " " + type + "\n");
         if (a.type == AttributeType::Float) {
-            for (float v : a.floats) putBE(out, &v, 4);
+            for (float v : a.floats)
+                putBE(out, &v, 4);
         } else if (wide) {
-            for (int64_t v : a.ints) putBE(out, &v, 8);
+            for (int64_t v : a.ints)
+                putBE(out, &v, 8);
         } else {
-            for (int64_t v : a.ints) { const int32_t w = int32_t(v); putBE(out, &w, 4); }
+            for (int64_t v : a.ints) {
+                const int32_t w = int32_t(v);
+                putBE(out, &w, 4);
+            }
         }
         putText(out, "\n");
     }

@@ -20,7 +20,7 @@ struct ArrayInfo
 {
     XmlTag tag;
     enum { Points, PointData, Other } role = Other;
-    size_t textBegin = 0, textEnd = 0;  // inline content
+    size_t textBegin = 0, textEnd = 0; // inline content
     size_t piece = 0;
 };
 
@@ -32,14 +32,21 @@ struct ScalarType
 
 bool scalarType(const std::string& name, ScalarType& t)
 {
-    static const struct { const char* name; ScalarType t; } kTypes[] = {
+    static const struct
+    {
+        const char* name;
+        ScalarType t;
+    } kTypes[] = {
         {"Int8", {1, false, true}},    {"UInt8", {1, false, false}},  {"Int16", {2, false, true}},
         {"UInt16", {2, false, false}}, {"Int32", {4, false, true}},   {"UInt32", {4, false, false}},
         {"Int64", {8, false, true}},   {"UInt64", {8, false, false}}, {"Float32", {4, true, true}},
         {"Float64", {8, true, true}},
     };
     for (const auto& k : kTypes)
-        if (name == k.name) { t = k.t; return true; }
+        if (name == k.name) {
+            t = k.t;
+            return true;
+        }
     return false;
 }
 
@@ -47,7 +54,9 @@ class VtkXmlParser
 {
 public:
     VtkXmlParser(const uint8_t* data, size_t size, const std::string& src)
-        : in(data, size, src), mSrc(src) {}
+        : in(data, size, src), mSrc(src)
+    {
+    }
 
     ParticleSet parse(std::string* detail)
     {
@@ -71,15 +80,18 @@ public:
                     if (comps != 3) in.failAt(a.tag.begin, "Points array must have 3 components");
                     piece.positions.resize(n);
                     for (size_t i = 0; i < n; ++i)
-                        piece.positions[i] = Vec3f(float(fv[3 * i]), float(fv[3 * i + 1]), float(fv[3 * i + 2]));
+                        piece.positions[i] =
+                            Vec3f(float(fv[3 * i]), float(fv[3 * i + 1]), float(fv[3 * i + 2]));
                     havePoints = true;
                 } else if (t.isFloat) {
-                    piece.addFloat(attr(a.tag, "Name"), comps, std::vector<float>(fv.begin(), fv.end()));
+                    piece.addFloat(attr(a.tag, "Name"), comps,
+                                   std::vector<float>(fv.begin(), fv.end()));
                 } else {
                     piece.addInt(attr(a.tag, "Name"), comps, std::move(iv));
                 }
             }
-            if (!havePoints && n > 0) in.fail("piece " + std::to_string(p) + " has no <Points> array");
+            if (!havePoints && n > 0)
+                in.fail("piece " + std::to_string(p) + " has no <Points> array");
             piece.positions.resize(n);
             append(result, std::move(piece), p);
         }
@@ -98,7 +110,7 @@ private:
     size_t mHeaderSize = 4;
     std::vector<size_t> mPieceCounts;
     std::vector<ArrayInfo> mArrays;
-    size_t mAppendedStart = 0;  // first byte after '_'
+    size_t mAppendedStart = 0; // first byte after '_'
     bool mHaveAppended = false;
 
     void scanStructure()
@@ -107,19 +119,25 @@ private:
         bool haveRoot = false, inPoints = false, inPointData = false;
         while (nextXmlTag(in, t)) {
             if (!haveRoot) {
-                if (t.name != "VTKFile") in.failAt(t.begin, "not a VTK XML file (no <VTKFile> root)");
+                if (t.name != "VTKFile")
+                    in.failAt(t.begin, "not a VTK XML file (no <VTKFile> root)");
                 haveRoot = true;
                 mType = attr(t, "type");
                 if (mType != "UnstructuredGrid" && mType != "PolyData")
-                    in.failAt(t.begin, "VTKFile type '" + mType.substr(0, 40) +
-                                           "' is not a point set (UnstructuredGrid or PolyData expected)");
+                    in.failAt(t.begin,
+                              "VTKFile type '" + mType.substr(0, 40) +
+                                  "' is not a point set (UnstructuredGrid or PolyData expected)");
                 const std::string order = attr(t, "byte_order", "LittleEndian");
-                if (order != "LittleEndian" && order != "BigEndian") in.failAt(t.begin, "bad byte_order");
+                if (order != "LittleEndian" && order != "BigEndian")
+                    in.failAt(t.begin, "bad byte_order");
                 mBigEndian = order == "BigEndian";
                 const std::string header = attr(t, "header_type", "UInt32");
-                if (header == "UInt64") mHeaderSize = 8;
-                else if (header == "UInt32") mHeaderSize = 4;
-                else in.failAt(t.begin, "unsupported header_type '" + header.substr(0, 40) + "'");
+                if (header == "UInt64")
+                    mHeaderSize = 8;
+                else if (header == "UInt32")
+                    mHeaderSize = 4;
+                else
+                    in.failAt(t.begin, "unsupported header_type '" + header.substr(0, 40) + "'");
                 mCompressor = attr(t, "compressor");
                 if (!mCompressor.empty() && mCompressor != "vtkZLibDataCompressor")
                     in.failAt(t.begin, "compressor '" + mCompressor.substr(0, 60) +
@@ -141,26 +159,30 @@ private:
                 ArrayInfo a;
                 a.tag = t;
                 a.piece = mPieceCounts.size() - 1;
-                a.role = inPoints ? ArrayInfo::Points : (inPointData ? ArrayInfo::PointData : ArrayInfo::Other);
+                a.role = inPoints ? ArrayInfo::Points
+                                  : (inPointData ? ArrayInfo::PointData : ArrayInfo::Other);
                 if (!t.selfClosing) {
                     a.textBegin = in.offset();
                     XmlTag close;
                     // content up to the matching </DataArray> (InformationKey children allowed)
-                    while (nextXmlTag(in, close) && !(close.isEnd && close.name == "DataArray")) {}
+                    while (nextXmlTag(in, close) && !(close.isEnd && close.name == "DataArray")) {
+                    }
                     a.textEnd = close.begin;
                 }
                 mArrays.push_back(std::move(a));
             } else if (t.name == "AppendedData" && !t.isEnd) {
                 mAppendedEncoding = attr(t, "encoding", "raw");
                 if (mAppendedEncoding != "raw" && mAppendedEncoding != "base64")
-                    in.failAt(t.begin, "unsupported AppendedData encoding '" + mAppendedEncoding.substr(0, 40) + "'");
+                    in.failAt(t.begin, "unsupported AppendedData encoding '" +
+                                           mAppendedEncoding.substr(0, 40) + "'");
                 size_t p = in.offset();
-                while (p < in.size() && isSpace(in.data()[p])) ++p;
+                while (p < in.size() && isSpace(in.data()[p]))
+                    ++p;
                 if (p >= in.size() || in.data()[p] != '_')
                     in.failAt(p, "AppendedData does not start with '_'");
                 mAppendedStart = p + 1;
                 mHaveAppended = true;
-                break;  // raw bytes follow: no more tags to scan
+                break; // raw bytes follow: no more tags to scan
             }
         }
         if (!haveRoot) in.failAt(0, "not a VTK XML file (no <VTKFile> root)");
@@ -209,7 +231,8 @@ private:
             const std::string s = attr(a.tag, "offset");
             if (!parseInt(s.data(), s.data() + s.size(), off) || off < 0 ||
                 uint64_t(off) > in.size() - mAppendedStart)
-                in.failAt(a.tag.begin, "DataArray offset '" + s.substr(0, 30) + "' lies outside the appended data");
+                in.failAt(a.tag.begin, "DataArray offset '" + s.substr(0, 30) +
+                                           "' lies outside the appended data");
             base = in.data() + mAppendedStart + off;
             avail = in.size() - mAppendedStart - size_t(off);
             base64 = mAppendedEncoding == "base64";
@@ -221,24 +244,30 @@ private:
         // Decoded size needed: header/block table first, then the data that they announce.
         const size_t tableMax = mHeaderSize * 3;
         std::string head = take(base, avail, base64, tableMax, a);
-        if (head.size() < mHeaderSize) in.failAt(a.tag.begin, "DataArray data ends inside its header");
+        if (head.size() < mHeaderSize)
+            in.failAt(a.tag.begin, "DataArray data ends inside its header");
         size_t total;
         if (mCompressor.empty()) {
             const uint64_t n = headerValue(reinterpret_cast<const uint8_t*>(head.data()));
             if (n != expectedBytes)
                 in.failAt(a.tag.begin, "DataArray '" + attr(a.tag, "Name") + "' header says " +
-                                           std::to_string(n) + " bytes, expected " + std::to_string(expectedBytes));
+                                           std::to_string(n) + " bytes, expected " +
+                                           std::to_string(expectedBytes));
             total = mHeaderSize + expectedBytes;
         } else {
-            if (head.size() < tableMax) in.failAt(a.tag.begin, "DataArray data ends inside its block table");
+            if (head.size() < tableMax)
+                in.failAt(a.tag.begin, "DataArray data ends inside its block table");
             const uint64_t blocks = headerValue(reinterpret_cast<const uint8_t*>(head.data()));
-            if (blocks > avail / mHeaderSize) in.failAt(a.tag.begin, "absurd zlib block count " + std::to_string(blocks));
+            if (blocks > avail / mHeaderSize)
+                in.failAt(a.tag.begin, "absurd zlib block count " + std::to_string(blocks));
             const size_t tableBytes = mHeaderSize * (3 + size_t(blocks));
             head = take(base, avail, base64, tableBytes, a);
-            if (head.size() < tableBytes) in.failAt(a.tag.begin, "DataArray data ends inside its block table");
+            if (head.size() < tableBytes)
+                in.failAt(a.tag.begin, "DataArray data ends inside its block table");
             uint64_t compressed = 0;
             for (size_t b = 0; b < blocks; ++b) {
-                compressed += headerValue(reinterpret_cast<const uint8_t*>(head.data()) + mHeaderSize * (3 + b));
+                compressed += headerValue(reinterpret_cast<const uint8_t*>(head.data()) +
+                                          mHeaderSize * (3 + b));
                 if (compressed > avail) in.failAt(a.tag.begin, "zlib blocks larger than the file");
             }
             total = tableBytes + size_t(compressed);
@@ -246,21 +275,25 @@ private:
         std::string all = take(base, avail, base64, total, a);
         if (all.size() < total)
             in.failAt(a.tag.begin, "DataArray '" + attr(a.tag, "Name") + "' is truncated: needs " +
-                                       std::to_string(total) + " bytes, " + std::to_string(all.size()) + " present");
+                                       std::to_string(total) + " bytes, " +
+                                       std::to_string(all.size()) + " present");
         return all;
     }
 
-    std::string take(const uint8_t* base, size_t avail, bool base64, size_t bytes, const ArrayInfo& a)
+    std::string take(const uint8_t* base, size_t avail, bool base64, size_t bytes,
+                     const ArrayInfo& a)
     {
-        if (!base64) return std::string(reinterpret_cast<const char*>(base), std::min(avail, bytes));
+        if (!base64)
+            return std::string(reinterpret_cast<const char*>(base), std::min(avail, bytes));
         std::string out;
         if (!decodeBase64(base, avail, out, bytes))
-            in.failAt(a.tag.begin, "invalid base64 data in DataArray '" + attr(a.tag, "Name") + "'");
+            in.failAt(a.tag.begin,
+                      "invalid base64 data in DataArray '" + attr(a.tag, "Name") + "'");
         return out;
     }
 
-    void decodeArray(const ArrayInfo& a, uint64_t count, const ScalarType& t, std::vector<double>& fv,
-                     std::vector<int64_t>& iv)
+    void decodeArray(const ArrayInfo& a, uint64_t count, const ScalarType& t,
+                     std::vector<double>& fv, std::vector<int64_t>& iv)
     {
         const std::string fmt = attr(a.tag, "format", "ascii");
         if (count > (uint64_t(1) << 40) / t.size) in.failAt(a.tag.begin, "absurd array size");
@@ -271,8 +304,10 @@ private:
             (t.isFloat ? fv.resize(n) : iv.resize(n));
             for (size_t i = 0; i < n; ++i) {
                 const double v = readAsciiNumber(text, "DataArray values");
-                if (t.isFloat) fv[i] = v;
-                else iv[i] = int64_t(v);
+                if (t.isFloat)
+                    fv[i] = v;
+                else
+                    iv[i] = int64_t(v);
             }
             return;
         }
@@ -286,10 +321,12 @@ private:
             const uint8_t* h = reinterpret_cast<const uint8_t*>(p.data());
             const uint64_t blocks = headerValue(h), blockSize = headerValue(h + mHeaderSize),
                            lastSize = headerValue(h + 2 * mHeaderSize);
-            const uint64_t expect = blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize ? lastSize : blockSize);
+            const uint64_t expect =
+                blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize ? lastSize : blockSize);
             if (expect != bytes)
                 in.failAt(a.tag.begin, "zlib blocks of '" + attr(a.tag, "Name") + "' hold " +
-                                           std::to_string(expect) + " bytes, expected " + std::to_string(bytes));
+                                           std::to_string(expect) + " bytes, expected " +
+                                           std::to_string(bytes));
             raw.resize(bytes);
             size_t src = mHeaderSize * (3 + size_t(blocks)), dst = 0;
             for (uint64_t b = 0; b < blocks; ++b) {
@@ -306,15 +343,24 @@ private:
         for (size_t i = 0; i < size_t(count); ++i) {
             const uint8_t* q = data + i * t.size;
             if (t.isFloat) {
-                fv[i] = t.size == 4 ? double(loadAs<float>(q, mBigEndian)) : loadAs<double>(q, mBigEndian);
+                fv[i] = t.size == 4 ? double(loadAs<float>(q, mBigEndian))
+                                    : loadAs<double>(q, mBigEndian);
                 continue;
             }
             int64_t v = 0;
             switch (t.size) {
-            case 1: v = t.isSigned ? int8_t(*q) : *q; break;
-            case 2: v = t.isSigned ? loadAs<int16_t>(q, mBigEndian) : loadAs<uint16_t>(q, mBigEndian); break;
-            case 4: v = t.isSigned ? loadAs<int32_t>(q, mBigEndian) : loadAs<uint32_t>(q, mBigEndian); break;
-            default: v = int64_t(loadAs<uint64_t>(q, mBigEndian)); break;
+            case 1:
+                v = t.isSigned ? int8_t(*q) : *q;
+                break;
+            case 2:
+                v = t.isSigned ? loadAs<int16_t>(q, mBigEndian) : loadAs<uint16_t>(q, mBigEndian);
+                break;
+            case 4:
+                v = t.isSigned ? loadAs<int32_t>(q, mBigEndian) : loadAs<uint32_t>(q, mBigEndian);
+                break;
+            default:
+                v = int64_t(loadAs<uint64_t>(q, mBigEndian));
+                break;
             }
             iv[i] = v;
         }
@@ -322,7 +368,10 @@ private:
 
     void append(ParticleSet& into, ParticleSet&& piece, size_t p)
     {
-        if (p == 0) { into = std::move(piece); return; }
+        if (p == 0) {
+            into = std::move(piece);
+            return;
+        }
         if (into.attributes.size() != piece.attributes.size())
             in.fail("pieces carry different point arrays");
         into.positions.insert(into.positions.end(), piece.positions.begin(), piece.positions.end());
@@ -338,7 +387,8 @@ private:
 
 } // namespace
 
-ParticleSet readVtkXml(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+ParticleSet readVtkXml(const uint8_t* data, size_t size, const std::string& src,
+                       std::string* detail)
 {
     return VtkXmlParser(data, size, src).parse(detail);
 }

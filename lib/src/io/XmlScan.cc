@@ -12,18 +12,24 @@ bool nextXmlTag(ByteReader& in, XmlTag& tag)
     const size_t n = in.size();
     size_t p = in.offset();
     while (true) {
-        while (p < n && d[p] != '<') ++p;
-        if (p >= n) { in.seek(n); return false; }
+        while (p < n && d[p] != '<')
+            ++p;
+        if (p >= n) {
+            in.seek(n);
+            return false;
+        }
         if (p + 3 < n && d[p + 1] == '!' && d[p + 2] == '-' && d[p + 3] == '-') {
             // comment: skip to "-->"
             size_t q = p + 4;
-            while (q + 2 < n && !(d[q] == '-' && d[q + 1] == '-' && d[q + 2] == '>')) ++q;
+            while (q + 2 < n && !(d[q] == '-' && d[q + 1] == '-' && d[q + 2] == '>'))
+                ++q;
             if (q + 2 >= n) in.failAt(p, "unterminated XML comment");
             p = q + 3;
             continue;
         }
         if (p + 1 < n && (d[p + 1] == '?' || d[p + 1] == '!')) {
-            while (p < n && d[p] != '>') ++p;
+            while (p < n && d[p] != '>')
+                ++p;
             if (p >= n) in.failAt(n, "unterminated XML declaration");
             ++p;
             continue;
@@ -33,27 +39,45 @@ bool nextXmlTag(ByteReader& in, XmlTag& tag)
     tag = XmlTag();
     tag.begin = p;
     size_t q = p + 1;
-    if (q < n && d[q] == '/') { tag.isEnd = true; ++q; }
+    if (q < n && d[q] == '/') {
+        tag.isEnd = true;
+        ++q;
+    }
     size_t s = q;
-    while (q < n && !isSpace(d[q]) && d[q] != '>' && d[q] != '/') ++q;
+    while (q < n && !isSpace(d[q]) && d[q] != '>' && d[q] != '/')
+        ++q;
     tag.name.assign(reinterpret_cast<const char*>(d + s), q - s);
     if (tag.name.empty()) in.failAt(p, "malformed XML tag");
     while (true) {
-        while (q < n && isSpace(d[q])) ++q;
+        while (q < n && isSpace(d[q]))
+            ++q;
         if (q >= n) in.failAt(p, "unterminated XML tag <" + tag.name + ">");
-        if (d[q] == '>') { ++q; break; }
-        if (d[q] == '/' && q + 1 < n && d[q + 1] == '>') { tag.selfClosing = true; q += 2; break; }
+        if (d[q] == '>') {
+            ++q;
+            break;
+        }
+        if (d[q] == '/' && q + 1 < n && d[q + 1] == '>') {
+            tag.selfClosing = true;
+            q += 2;
+            break;
+        }
         s = q;
-        while (q < n && d[q] != '=' && !isSpace(d[q]) && d[q] != '>') ++q;
+        while (q < n && d[q] != '=' && !isSpace(d[q]) && d[q] != '>')
+            ++q;
         std::string key(reinterpret_cast<const char*>(d + s), q - s);
-        while (q < n && isSpace(d[q])) ++q;
-        if (q >= n || d[q] != '=') in.failAt(q, "malformed attribute '" + key.substr(0, 40) + "' in <" + tag.name + ">");
+        while (q < n && isSpace(d[q]))
+            ++q;
+        if (q >= n || d[q] != '=')
+            in.failAt(q, "malformed attribute '" + key.substr(0, 40) + "' in <" + tag.name + ">");
         ++q;
-        while (q < n && isSpace(d[q])) ++q;
-        if (q >= n || (d[q] != '"' && d[q] != '\'')) in.failAt(q, "unquoted attribute in <" + tag.name + ">");
+        while (q < n && isSpace(d[q]))
+            ++q;
+        if (q >= n || (d[q] != '"' && d[q] != '\''))
+            in.failAt(q, "unquoted attribute in <" + tag.name + ">");
         const uint8_t quote = d[q++];
         s = q;
-        while (q < n && d[q] != quote) ++q;
+        while (q < n && d[q] != quote)
+            ++q;
         if (q >= n) in.failAt(s, "unterminated attribute value in <" + tag.name + ">");
         tag.attrs[key].assign(reinterpret_cast<const char*>(d + s), q - s);
         ++q;

@@ -13,11 +13,11 @@ namespace io_internal {
 
 struct XmlTag
 {
-    std::string name;                          ///< without '/' for end tags
+    std::string name; ///< without '/' for end tags
     std::map<std::string, std::string> attrs;
-    bool isEnd = false;                        ///< </name>
-    bool selfClosing = false;                  ///< <name ... />
-    size_t begin = 0, end = 0;                 ///< byte range of "<...>" in the buffer
+    bool isEnd = false;        ///< </name>
+    bool selfClosing = false;  ///< <name ... />
+    size_t begin = 0, end = 0; ///< byte range of "<...>" in the buffer
 };
 
 /// Next element tag at or after the reader's position, skipping text, comments, <?...?> and

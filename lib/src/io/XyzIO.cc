@@ -35,10 +35,11 @@ ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, st
     ByteReader in(data, size, src);
     if (size % 12 != 0)
         in.failAt(size - size % 12, "raw .xyz size " + std::to_string(size) +
-                                        " is not a multiple of 12 bytes (3 float32 per particle): truncated or not raw float32 xyz");
+                                        " is not a multiple of 12 bytes (3 float32 per particle): "
+                                        "truncated or not raw float32 xyz");
     ParticleSet set;
     set.positions.resize(size / 12);
-    if (size) std::memcpy(set.positions.data(), data, size);  // little-endian host
+    if (size) std::memcpy(set.positions.data(), data, size); // little-endian host
     if (detail) *detail = "raw float32 little-endian";
     return set;
 }

@@ -23,15 +23,15 @@ namespace {
 void deactivateOutsideBand(openvdb::FloatTree& tree, float background)
 {
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
-    leaves.foreach([background](openvdb::FloatTree::LeafNodeType& leaf, size_t) {
+    leaves.foreach ([background](openvdb::FloatTree::LeafNodeType& leaf, size_t) {
         for (auto v = leaf.beginValueOn(); v; ++v)
             if (std::abs(*v) >= background) v.setValueOff();
     });
 }
 } // namespace
 
-openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Params& params, bool keepOnlyBand,
-                                       const GridInfo& info)
+openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Params& params,
+                                       bool keepOnlyBand, const GridInfo& info)
 {
     const float background = float(params.background());
     if (keepOnlyBand) deactivateOutsideBand(*tree, background);
@@ -49,7 +49,8 @@ openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Param
     grid->insertMeta("fluidsurf:field", openvdb::StringMetadata(fieldName(params.field)));
     grid->insertMeta("fluidsurf:method", openvdb::StringMetadata(methodName(params.method)));
     grid->insertMeta("fluidsurf:particle_count", openvdb::Int64Metadata(int64_t(info.particles)));
-    grid->insertMeta("fluidsurf:isolated_particles", openvdb::Int64Metadata(int64_t(info.isolated)));
+    grid->insertMeta("fluidsurf:isolated_particles",
+                     openvdb::Int64Metadata(int64_t(info.isolated)));
     grid->insertMeta("fluidsurf:source", openvdb::StringMetadata(info.source));
     grid->insertMeta("fluidsurf:version", openvdb::StringMetadata(FLUIDSURF_VERSION_STRING));
     return grid;
@@ -59,10 +60,11 @@ openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Param
 
 std::vector<std::string> levelSetMetadataNames()
 {
-    return {"fluidsurf:particle_radius", "fluidsurf:influence_radius", "fluidsurf:smoothing_length",
-            "fluidsurf:t_low", "fluidsurf:t_high", "fluidsurf:field", "fluidsurf:method",
-            "fluidsurf:particle_count", "fluidsurf:isolated_particles", "fluidsurf:source",
-            "fluidsurf:version"};
+    return {
+        "fluidsurf:particle_radius", "fluidsurf:influence_radius", "fluidsurf:smoothing_length",
+        "fluidsurf:t_low",           "fluidsurf:t_high",           "fluidsurf:field",
+        "fluidsurf:method",          "fluidsurf:particle_count",   "fluidsurf:isolated_particles",
+        "fluidsurf:source",          "fluidsurf:version"};
 }
 
 namespace {
@@ -77,16 +79,18 @@ void makeUuidDeterministic(const std::string& path)
     std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     if (!in.eof() && in.fail()) throw OutputError(path + ": cannot read back the written file");
     in.close();
-    if (bytes.size() < kUuidOffset + kUuidLength || bytes[kUuidOffset + 8] != '-' || bytes[kUuidOffset + 13] != '-')
+    if (bytes.size() < kUuidOffset + kUuidLength || bytes[kUuidOffset + 8] != '-' ||
+        bytes[kUuidOffset + 13] != '-')
         throw OutputError(path + ": unexpected VDB header layout (OpenVDB version?)");
-    uint64_t h[2] = {0xcbf29ce484222325ull, 0x84222325cbf29ce4ull};  // two FNV-1a streams
+    uint64_t h[2] = {0xcbf29ce484222325ull, 0x84222325cbf29ce4ull}; // two FNV-1a streams
     for (size_t i = kUuidOffset + kUuidLength; i < bytes.size(); ++i) {
         h[0] = (h[0] ^ uint8_t(bytes[i])) * 0x100000001b3ull;
         h[1] = (h[1] ^ uint8_t(bytes[i]) ^ 0x5a) * 0x100000001b3ull;
     }
     char uuid[40];
-    std::snprintf(uuid, sizeof(uuid), "%08x-%04x-%04x-%04x-%012llx", unsigned(h[0] >> 32), unsigned(h[0] >> 16) & 0xffff,
-                  (unsigned(h[0]) & 0x0fff) | 0x4000, (unsigned(h[1] >> 48) & 0x3fff) | 0x8000,
+    std::snprintf(uuid, sizeof(uuid), "%08x-%04x-%04x-%04x-%012llx", unsigned(h[0] >> 32),
+                  unsigned(h[0] >> 16) & 0xffff, (unsigned(h[0]) & 0x0fff) | 0x4000,
+                  (unsigned(h[1] >> 48) & 0x3fff) | 0x8000,
                   (unsigned long long)(h[1] & 0xffffffffffffull));
     std::fstream out(path, std::ios::binary | std::ios::in | std::ios::out);
     out.seekp(std::streamoff(kUuidOffset));

@@ -20,8 +20,8 @@ struct GridInfo
 /// Turn a tree of clamped field values into the "surface" level-set grid. With
 /// keepOnlyBand, voxels whose |phi| reached the background are deactivated first (the
 /// volume methods activate every vertex; the narrow band keeps its band).
-openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Params& params, bool keepOnlyBand,
-                                       const GridInfo& info);
+openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Params& params,
+                                       bool keepOnlyBand, const GridInfo& info);
 
 } // namespace levelset
 } // namespace fluidsurf

@@ -21,9 +21,12 @@ inline openvdb::Vec3d activeGradient(const openvdb::Coord& ijk, float center, Re
         lo[a] -= 1, hi[a] += 1;
         float vlo = 0, vhi = 0;
         const bool onLo = read(lo, a, vlo), onHi = read(hi, a, vhi);
-        if (onLo && onHi) g[a] = 0.5 * (double(vhi) - double(vlo));
-        else if (onHi) g[a] = double(vhi) - double(center);
-        else if (onLo) g[a] = double(center) - double(vlo);
+        if (onLo && onHi)
+            g[a] = 0.5 * (double(vhi) - double(vlo));
+        else if (onHi)
+            g[a] = double(vhi) - double(center);
+        else if (onLo)
+            g[a] = double(center) - double(vlo);
     }
     return g;
 }
@@ -31,7 +34,9 @@ inline openvdb::Vec3d activeGradient(const openvdb::Coord& ijk, float center, Re
 /// The same through an accessor, at any voxel.
 inline openvdb::Vec3d indexGradient(FloatAccessor& acc, const openvdb::Coord& ijk)
 {
-    return activeGradient(ijk, acc.getValue(ijk), [&](const openvdb::Coord& c, int, float& v) { return acc.probeValue(c, v); });
+    return activeGradient(ijk, acc.getValue(ijk), [&](const openvdb::Coord& c, int, float& v) {
+        return acc.probeValue(c, v);
+    });
 }
 
 } // namespace mesh

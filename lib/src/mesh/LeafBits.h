@@ -21,42 +21,58 @@ using FloatLeaf = openvdb::FloatTree::LeafNodeType;
 struct LeafBits
 {
     uint64_t active[8] = {}, in[8] = {};
-    LeafBits() = default;  // no leaf: nothing active
+    LeafBits() = default; // no leaf: nothing active
     explicit LeafBits(const FloatLeaf& leaf)
     {
         const auto& mask = leaf.getValueMask();
-        for (int x = 0; x < 8; ++x) active[x] = mask.template getWord<uint64_t>(x), in[x] = 0;
+        for (int x = 0; x < 8; ++x)
+            active[x] = mask.template getWord<uint64_t>(x), in[x] = 0;
         const float* v = leaf.buffer().data();
-        for (int i = 0; i < 512; ++i) in[i >> 6] |= uint64_t(v[i] < 0) << (i & 63);
+        for (int i = 0; i < 512; ++i)
+            in[i >> 6] |= uint64_t(v[i] < 0) << (i & 63);
     }
 };
-constexpr uint64_t kZBelow7 = 0x7F7F7F7F7F7F7F7FULL;  // bits with z < 7
-constexpr uint64_t kYBelow7 = 0x00FFFFFFFFFFFFFFULL;  // bits with y < 7
-constexpr uint64_t kZ0 = 0x0101010101010101ULL;       // bits with z = 0
+constexpr uint64_t kZBelow7 = 0x7F7F7F7F7F7F7F7FULL; // bits with z < 7
+constexpr uint64_t kYBelow7 = 0x00FFFFFFFFFFFFFFULL; // bits with y < 7
+constexpr uint64_t kZ0 = 0x0101010101010101ULL;      // bits with z = 0
 constexpr uint64_t kZ7 = kZ0 << 7, kY7 = 0xFFULL << 56;
 // Two planes of one x side by side in one word, so squareAll/Any see cells across a leaf face:
 // this leaf's row y = 7 as row 0 and the +y neighbour's row 0 as row 1; or column z = 7 as
 // column 0 and the +z neighbour's column 0 as column 1.
-inline uint64_t acrossY(uint64_t w, uint64_t plusY) { return w >> 56 | plusY << 8; }
-inline uint64_t acrossZ(uint64_t w, uint64_t plusZ) { return (w >> 7 & kZ0) | (plusZ & kZ0) << 1; }
+inline uint64_t acrossY(uint64_t w, uint64_t plusY)
+{
+    return w >> 56 | plusY << 8;
+}
+inline uint64_t acrossZ(uint64_t w, uint64_t plusZ)
+{
+    return (w >> 7 & kZ0) | (plusZ & kZ0) << 1;
+}
 /// Bit (y, z) set when bits (y, z), (y, z+1), (y+1, z), (y+1, z+1) all are / any is.
-inline uint64_t squareAll(uint64_t w) { return w & w >> 1 & w >> 8 & w >> 9; }
-inline uint64_t squareAny(uint64_t w) { return w | w >> 1 | w >> 8 | w >> 9; }
+inline uint64_t squareAll(uint64_t w)
+{
+    return w & w >> 1 & w >> 8 & w >> 9;
+}
+inline uint64_t squareAny(uint64_t w)
+{
+    return w | w >> 1 | w >> 8 | w >> 9;
+}
 
 /// A linear transform as a matrix: index -> world, and its inverse Jacobian for gradients.
 /// A leaf and its six face neighbours as raw values and active bits (OpenVDB's per-value getters
 /// cost several times more here), for gradients at the leaf's voxels.
 struct LeafStar
 {
-    const float* values[7] = {};    // 0: the leaf; 1 + 2 * axis + (0: -axis, 1: +axis); null: none
+    const float* values[7] = {}; // 0: the leaf; 1 + 2 * axis + (0: -axis, 1: +axis); null: none
     const LeafBits* bits[7] = {};
 
     /// Value and active state at local l, whose coordinate along axis may be -1 or 8.
     bool read(openvdb::Coord l, int axis, float& v) const
     {
         int k = 0;
-        if (l[axis] < 0) k = 1 + 2 * axis, l[axis] += FloatLeaf::DIM;
-        else if (l[axis] >= int(FloatLeaf::DIM)) k = 2 + 2 * axis, l[axis] -= FloatLeaf::DIM;
+        if (l[axis] < 0)
+            k = 1 + 2 * axis, l[axis] += FloatLeaf::DIM;
+        else if (l[axis] >= int(FloatLeaf::DIM))
+            k = 2 + 2 * axis, l[axis] -= FloatLeaf::DIM;
         if (!values[k]) return false;
         const int i = l.x() << 6 | l.y() << 3 | l.z();
         v = values[k][i];
@@ -66,8 +82,9 @@ struct LeafStar
     /// neighbours, one-sided where one is missing.
     openvdb::Vec3d gradient(const openvdb::Coord& l) const
     {
-        return activeGradient(l, values[0][l.x() << 6 | l.y() << 3 | l.z()],
-                              [this](const openvdb::Coord& c, int axis, float& v) { return read(c, axis, v); });
+        return activeGradient(
+            l, values[0][l.x() << 6 | l.y() << 3 | l.z()],
+            [this](const openvdb::Coord& c, int axis, float& v) { return read(c, axis, v); });
     }
 };
 

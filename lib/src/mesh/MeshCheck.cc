@@ -16,7 +16,8 @@ struct UnionFind
     explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
     uint32_t find(uint32_t a)
     {
-        while (parent[a] != a) a = parent[a] = parent[parent[a]];
+        while (parent[a] != a)
+            a = parent[a] = parent[parent[a]];
         return a;
     }
     void join(uint32_t a, uint32_t b) { parent[find(a)] = find(b); }
@@ -27,14 +28,19 @@ struct UnionFind
 size_t linkPieces(const std::vector<std::pair<uint32_t, uint32_t>>& link)
 {
     std::vector<uint32_t> ids;
-    for (const auto& e : link) ids.push_back(e.first), ids.push_back(e.second);
+    for (const auto& e : link)
+        ids.push_back(e.first), ids.push_back(e.second);
     std::sort(ids.begin(), ids.end());
     ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
     UnionFind uf(ids.size());
-    auto local = [&](uint32_t v) { return uint32_t(std::lower_bound(ids.begin(), ids.end(), v) - ids.begin()); };
-    for (const auto& e : link) uf.join(local(e.first), local(e.second));
+    auto local = [&](uint32_t v) {
+        return uint32_t(std::lower_bound(ids.begin(), ids.end(), v) - ids.begin());
+    };
+    for (const auto& e : link)
+        uf.join(local(e.first), local(e.second));
     size_t pieces = 0;
-    for (uint32_t i = 0; i < ids.size(); ++i) pieces += uf.find(i) == i;
+    for (uint32_t i = 0; i < ids.size(); ++i)
+        pieces += uf.find(i) == i;
     return pieces;
 }
 
@@ -63,10 +69,12 @@ MeshReport checkMesh(const TriangleMesh& mesh)
         const double cx = uy * vz - uz * vy, cy = uz * vx - ux * vz, cz = ux * vy - uy * vx;
         const double twiceArea = std::sqrt(cx * cx + cy * cy + cz * cz);
         const double wx = double(c.x) - b.x, wy = double(c.y) - b.y, wz = double(c.z) - b.z;
-        const double longest = std::max({ux * ux + uy * uy + uz * uz, vx * vx + vy * vy + vz * vz, wx * wx + wy * wy + wz * wz});
-        if (!(twiceArea > 1e-10 * longest) && t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) ++r.degenerateTriangles;
+        const double longest = std::max({ux * ux + uy * uy + uz * uz, vx * vx + vy * vy + vz * vz,
+                                         wx * wx + wy * wy + wz * wz});
+        if (!(twiceArea > 1e-10 * longest) && t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            ++r.degenerateTriangles;
         r.area += 0.5 * twiceArea;
-        r.volume += (double(a.x) * cx + double(a.y) * cy + double(a.z) * cz) / 6;  // a . (u x v) / 6
+        r.volume += (double(a.x) * cx + double(a.y) * cy + double(a.z) * cz) / 6; // a . (u x v) / 6
         for (int k = 0; k < 3; ++k) {
             const uint32_t p = t[k], q = t[(k + 1) % 3];
             edges.push_back({uint64_t(std::min(p, q)) << 32 | std::max(p, q), p < q});
@@ -77,22 +85,28 @@ MeshReport checkMesh(const TriangleMesh& mesh)
     std::sort(edges.begin(), edges.end());
     for (size_t i = 0; i < edges.size();) {
         size_t j = i;
-        while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+        while (j < edges.size() && edges[j].first == edges[i].first)
+            ++j;
         const size_t count = j - i;
-        if (count == 1) ++r.boundaryEdges;
-        else if (count > 2) ++r.nonManifoldEdges;
-        else if (edges[i].second == edges[i + 1].second) ++r.misorientedEdges;
+        if (count == 1)
+            ++r.boundaryEdges;
+        else if (count > 2)
+            ++r.nonManifoldEdges;
+        else if (edges[i].second == edges[i + 1].second)
+            ++r.misorientedEdges;
         i = j;
     }
 
     // Vertex fans, through a vertex -> triangles table.
     std::vector<uint32_t> start(nv + 1, 0);
-    for (size_t v = 0; v < nv; ++v) start[v + 1] = start[v] + degree[v];
+    for (size_t v = 0; v < nv; ++v)
+        start[v + 1] = start[v] + degree[v];
     std::vector<uint32_t> incident(start[nv]), fill(start.begin(), start.end() - 1);
     for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
         const auto& tri = mesh.triangles[t];
         if (tri[0] >= nv || tri[1] >= nv || tri[2] >= nv) continue;
-        for (uint32_t v : tri) incident[fill[v]++] = t;
+        for (uint32_t v : tri)
+            incident[fill[v]++] = t;
     }
     std::vector<std::pair<uint32_t, uint32_t>> link;
     for (size_t v = 0; v < nv; ++v) {
@@ -115,13 +129,16 @@ MeshReport checkMesh(const TriangleMesh& mesh)
 std::string describe(const MeshReport& r)
 {
     std::ostringstream s;
-    s << r.vertices << " vertices, " << r.triangles << " triangles, " << r.components << " component"
-      << (r.components == 1 ? "" : "s") << ", volume " << r.volume << ", area " << r.area << ", ";
-    if (r.watertight()) s << "watertight";
+    s << r.vertices << " vertices, " << r.triangles << " triangles, " << r.components
+      << " component" << (r.components == 1 ? "" : "s") << ", volume " << r.volume << ", area "
+      << r.area << ", ";
+    if (r.watertight())
+        s << "watertight";
     else
         s << "NOT watertight: " << r.boundaryEdges << " boundary edges, " << r.nonManifoldEdges
-          << " non-manifold edges, " << r.nonManifoldVertices << " non-manifold vertices, " << r.misorientedEdges
-          << " misoriented edges, " << r.degenerateTriangles << " degenerate triangles";
+          << " non-manifold edges, " << r.nonManifoldVertices << " non-manifold vertices, "
+          << r.misorientedEdges << " misoriented edges, " << r.degenerateTriangles
+          << " degenerate triangles";
     if (r.unusedVertices) s << ", " << r.unusedVertices << " unused vertices";
     return s.str();
 }

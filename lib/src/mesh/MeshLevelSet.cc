@@ -11,7 +11,10 @@
 
 namespace fluidsurf {
 
-const char* mesherName(Mesher m) { return m == Mesher::MarchingCubes ? "mc" : "openvdb"; }
+const char* mesherName(Mesher m)
+{
+    return m == Mesher::MarchingCubes ? "mc" : "openvdb";
+}
 
 Mesher mesherFromName(const std::string& name)
 {
@@ -23,15 +26,18 @@ Mesher mesherFromName(const std::string& name)
 TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, MeshStats* stats)
 {
     if (!grid.transform().isLinear())
-        throw ValueError("grid '" + grid.getName() + "' has a non-linear (frustum) transform; only linear ones are meshed");
+        throw ValueError("grid '" + grid.getName() +
+                         "' has a non-linear (frustum) transform; only linear ones are meshed");
     const auto start = std::chrono::steady_clock::now();
     size_t cells = 0;
-    TriangleMesh m = mesher == Mesher::MarchingCubes ? mesh::marchingCubes(grid, &cells) : mesh::openvdbVolumeToMesh(grid);
+    TriangleMesh m = mesher == Mesher::MarchingCubes ? mesh::marchingCubes(grid, &cells)
+                                                     : mesh::openvdbVolumeToMesh(grid);
     if (stats) {
         stats->surfaceCells = cells;
         stats->vertices = m.points.size();
         stats->triangles = m.triangles.size();
-        stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        stats->seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     }
     return m;
 }
@@ -39,7 +45,8 @@ TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, MeshSta
 openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string& gridName)
 {
     const std::vector<uint8_t> bytes = io_internal::readFile(path);
-    const openvdb::GridPtrVecPtr grids = io_internal::readVdbGrids(bytes.data(), bytes.size(), path);
+    const openvdb::GridPtrVecPtr grids =
+        io_internal::readVdbGrids(bytes.data(), bytes.size(), path);
     openvdb::FloatGrid::Ptr levelSet, anyFloat;
     std::string names;
     for (const openvdb::GridBase::Ptr& g : *grids) {
@@ -56,8 +63,10 @@ openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string&
     }
     if (!levelSet) levelSet = gridName.empty() ? anyFloat : nullptr;
     if (!levelSet)
-        throw InputError(path + ": no " + (gridName.empty() ? std::string("float grid") : "float grid named '" + gridName + "'") +
-                         " in this VDB (grids: " + (names.empty() ? std::string("none") : names) + ")");
+        throw InputError(
+            path + ": no " +
+            (gridName.empty() ? std::string("float grid") : "float grid named '" + gridName + "'") +
+            " in this VDB (grids: " + (names.empty() ? std::string("none") : names) + ")");
     return levelSet;
 }
 

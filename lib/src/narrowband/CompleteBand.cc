@@ -24,14 +24,19 @@ struct FrontierFinder
 {
     const openvdb::FloatTree& tree;
     float threshold;
-    bool bothEnds;  // look for crossings from both ends of each edge (scanning only new voxels)
+    bool bothEnds; // look for crossings from both ends of each edge (scanning only new voxels)
     openvdb::MaskTree::Ptr front{new openvdb::MaskTree(false)};
 
-    FrontierFinder(const openvdb::FloatTree& t, float th, bool both) : tree(t), threshold(th), bothEnds(both) {}
-    FrontierFinder(FrontierFinder& o, tbb::split) : tree(o.tree), threshold(o.threshold), bothEnds(o.bothEnds) {}
+    FrontierFinder(const openvdb::FloatTree& t, float th, bool both)
+        : tree(t), threshold(th), bothEnds(both)
+    {
+    }
+    FrontierFinder(FrontierFinder& o, tbb::split)
+        : tree(o.tree), threshold(o.threshold), bothEnds(o.bothEnds)
+    {
+    }
 
-    template <typename Range>
-    void operator()(const Range& range)
+    template <typename Range> void operator()(const Range& range)
     {
         using LeafT = openvdb::FloatTree::LeafNodeType;
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
@@ -81,9 +86,12 @@ struct FrontierFinder
 };
 } // namespace
 
-size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& particles, const Params& params)
+size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
+                    const Params& params)
 {
-    return completeBand(tree, params, [&](openvdb::FloatTree& grown) { field::evaluateField(grown, particles, params); });
+    return completeBand(tree, params, [&](openvdb::FloatTree& grown) {
+        field::evaluateField(grown, particles, params);
+    });
 }
 
 size_t completeBand(openvdb::FloatTree& tree, const Params& params, const FieldEvaluator& evaluate)
@@ -96,15 +104,18 @@ size_t completeBand(openvdb::FloatTree& tree, const Params& params, const FieldE
     for (int round = 0; round < kMaxRounds; ++round) {
         FrontierFinder finder(tree, threshold, lastAdded != nullptr);
         {
-            openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(lastAdded ? *lastAdded : tree);
+            openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(lastAdded ? *lastAdded
+                                                                                  : tree);
             tbb::parallel_reduce(leaves.leafRange(), finder);
         }
         const size_t count = finder.front->activeVoxelCount();
         if (count == 0) break;
-        auto grown = std::make_shared<openvdb::FloatTree>(*finder.front, tree.background(), openvdb::TopologyCopy());
+        auto grown = std::make_shared<openvdb::FloatTree>(*finder.front, tree.background(),
+                                                          openvdb::TopologyCopy());
         evaluate(*grown);
         openvdb::tree::ValueAccessor<openvdb::FloatTree> acc(tree);
-        for (auto v = grown->cbeginValueOn(); v; ++v) acc.setValue(v.getCoord(), *v);
+        for (auto v = grown->cbeginValueOn(); v; ++v)
+            acc.setValue(v.getCoord(), *v);
         added += count;
         lastAdded = grown;
     }

@@ -29,7 +29,8 @@ using FieldEvaluator = std::function<void(openvdb::FloatTree&)>;
 size_t completeBand(openvdb::FloatTree& tree, const Params& params, const FieldEvaluator& evaluate);
 
 /// The same with the CPU gather over particles.
-size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& particles, const Params& params);
+size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
+                    const Params& params);
 
 } // namespace narrowband
 } // namespace fluidsurf

@@ -29,9 +29,13 @@ struct BandBuilder
     openvdb::MaskTree::Ptr tree{new openvdb::MaskTree(false)};
 
     BandBuilder(const neighbors::CellIndex& p, const std::vector<uint32_t>& s, double w, double inv)
-        : particles(p), seeds(s), width(w), invDx(inv) {}
+        : particles(p), seeds(s), width(w), invDx(inv)
+    {
+    }
     BandBuilder(BandBuilder& o, tbb::split)
-        : particles(o.particles), seeds(o.seeds), width(o.width), invDx(o.invDx) {}
+        : particles(o.particles), seeds(o.seeds), width(o.width), invDx(o.invDx)
+    {
+    }
 
     void operator()(const tbb::blocked_range<size_t>& r)
     {
@@ -48,7 +52,8 @@ struct BandBuilder
             openvdb::Coord ijk;
             for (ijk[0] = lo[0]; ijk[0] <= hi[0]; ++ijk[0])
                 for (ijk[1] = lo[1]; ijk[1] <= hi[1]; ++ijk[1])
-                    for (ijk[2] = lo[2]; ijk[2] <= hi[2]; ++ijk[2]) acc.setValueOn(ijk);
+                    for (ijk[2] = lo[2]; ijk[2] <= hi[2]; ++ijk[2])
+                        acc.setValueOn(ijk);
         }
     }
     void join(BandBuilder& other) { tree->topologyUnion(*other.tree); }
@@ -56,8 +61,8 @@ struct BandBuilder
 } // namespace
 
 openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
-                                       const classify::Classification& classes, const Params& params,
-                                       double width)
+                                       const classify::Classification& classes,
+                                       const Params& params, double width)
 {
     std::vector<uint32_t> seeds;
     for (size_t i = 0; i < classes.classes.size(); ++i)
@@ -71,9 +76,10 @@ openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
 
 openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const Params& params)
 {
-    if (particles.size() == 0) return openvdb::CoordBBox();  // empty
+    if (particles.size() == 0) return openvdb::CoordBBox(); // empty
     BBox3f box;
-    for (const Vec3f& p : particles.positions) box.expand(p);
+    for (const Vec3f& p : particles.positions)
+        box.expand(p);
     const double inv = 1 / params.voxelSize, R = params.influenceRadius;
     openvdb::Coord lo, hi;
     for (int a = 0; a < 3; ++a) {
@@ -89,9 +95,10 @@ double checkDenseMemory(const openvdb::CoordBBox& box, double bytesPerVertex, co
     const double bytes = double(d.x()) * double(d.y()) * double(d.z()) * bytesPerVertex;
     const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
     if (physical > 0 && bytes > 0.8 * physical)
-        throw ValueError(std::string(what) + " needs about " + std::to_string(int64_t(bytes / (1 << 20))) +
-                         " MiB for " + std::to_string(d.x()) + " x " + std::to_string(d.y()) + " x " +
-                         std::to_string(d.z()) + " vertices, more than this machine has; use the narrow band");
+        throw ValueError(
+            std::string(what) + " needs about " + std::to_string(int64_t(bytes / (1 << 20))) +
+            " MiB for " + std::to_string(d.x()) + " x " + std::to_string(d.y()) + " x " +
+            std::to_string(d.z()) + " vertices, more than this machine has; use the narrow band");
     return bytes;
 }
 

@@ -25,8 +25,8 @@ double effectiveBandWidth(const Params& params, double maxRadius);
 /// Active voxels within +-width of the surface and splash particles, and of isolated ones with
 /// params.keepIsolated (parallel, deterministic). width comes from effectiveBandWidth.
 openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
-                                       const classify::Classification& classes, const Params& params,
-                                       double width);
+                                       const classify::Classification& classes,
+                                       const Params& params, double width);
 
 /// Index box of every vertex within R of the particles' bounding box (the "bounding volume").
 openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const Params& params);

@@ -14,7 +14,7 @@ namespace fluidsurf {
 namespace neighbors {
 
 namespace {
-uint64_t spreadBits(uint32_t v)  // 21 bits -> every third bit of 63
+uint64_t spreadBits(uint32_t v) // 21 bits -> every third bit of 63
 {
     uint64_t x = v & 0x1fffff;
     x = (x | x << 32) & 0x1f00000000ffffull;
@@ -25,11 +25,14 @@ uint64_t spreadBits(uint32_t v)  // 21 bits -> every third bit of 63
     return x;
 }
 
-struct Handle  // the thesis' "handler": cell key and particle id
+struct Handle // the thesis' "handler": cell key and particle id
 {
     uint64_t key;
     uint32_t index;
-    bool operator<(const Handle& o) const { return key < o.key || (key == o.key && index < o.index); }
+    bool operator<(const Handle& o) const
+    {
+        return key < o.key || (key == o.key && index < o.index);
+    }
 };
 } // namespace
 
@@ -41,24 +44,29 @@ uint64_t mortonKey(uint32_t cx, uint32_t cy, uint32_t cz)
 int64_t CellIndex::cellCoord(double v, int axis) const
 {
     const double c = std::floor((v - origin[axis]) / cellSize);
-    if (!(c >= 0)) return -1;  // also NaN
+    if (!(c >= 0)) return -1; // also NaN
     if (c >= double(dims[axis])) return dims[axis];
     return int64_t(c);
 }
 
 namespace {
-inline size_t slotOf(uint64_t key, size_t mask) { return size_t((key * 0x9e3779b97f4a7c15ull) >> 17) & mask; }
+inline size_t slotOf(uint64_t key, size_t mask)
+{
+    return size_t((key * 0x9e3779b97f4a7c15ull) >> 17) & mask;
+}
 } // namespace
 
 void CellIndex::buildLookup()
 {
     size_t size = 16;
-    while (size < 2 * keys.size()) size *= 2;  // load factor <= 1/2
+    while (size < 2 * keys.size())
+        size *= 2; // load factor <= 1/2
     tableKeys.assign(size, kEmptyKey);
     tableCells.assign(size, 0);
     for (size_t c = 0; c < keys.size(); ++c) {
         size_t slot = slotOf(keys[c], size - 1);
-        while (tableKeys[slot] != kEmptyKey) slot = (slot + 1) & (size - 1);
+        while (tableKeys[slot] != kEmptyKey)
+            slot = (slot + 1) & (size - 1);
         tableKeys[slot] = keys[c];
         tableCells[slot] = uint32_t(c);
     }
@@ -66,7 +74,9 @@ void CellIndex::buildLookup()
 
 CellRange CellIndex::find(int64_t cx, int64_t cy, int64_t cz) const
 {
-    if (cx < 0 || cy < 0 || cz < 0 || cx >= dims[0] || cy >= dims[1] || cz >= dims[2] || tableKeys.empty()) return {};
+    if (cx < 0 || cy < 0 || cz < 0 || cx >= dims[0] || cy >= dims[1] || cz >= dims[2] ||
+        tableKeys.empty())
+        return {};
     const uint64_t key = mortonKey(uint32_t(cx), uint32_t(cy), uint32_t(cz));
     const size_t mask = tableKeys.size() - 1;
     for (size_t slot = slotOf(key, mask);; slot = (slot + 1) & mask) {
@@ -101,32 +111,36 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
         return index;
     }
     BBox3f box;
-    for (size_t i = 0; i < n; ++i) box.expand(positions[i]);
+    for (size_t i = 0; i < n; ++i)
+        box.expand(positions[i]);
     cellGrid(box, cellSize, index.origin, index.dims);
     std::vector<Handle> handles(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) {
-            uint32_t c[3];
-            for (int a = 0; a < 3; ++a) {
-                const double v = std::floor((double(positions[i][a]) - index.origin[a]) / cellSize);
-                c[a] = uint32_t(std::min(std::max(v, 0.0), double(index.dims[a] - 1)));
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                uint32_t c[3];
+                for (int a = 0; a < 3; ++a) {
+                    const double v =
+                        std::floor((double(positions[i][a]) - index.origin[a]) / cellSize);
+                    c[a] = uint32_t(std::min(std::max(v, 0.0), double(index.dims[a] - 1)));
+                }
+                handles[i] = {mortonKey(c[0], c[1], c[2]), uint32_t(i)};
             }
-            handles[i] = {mortonKey(c[0], c[1], c[2]), uint32_t(i)};
-        }
-    });
+        });
     tbb::parallel_sort(handles.begin(), handles.end());
 
     index.positions.resize(n);
     index.order.resize(n);
     if (radii) index.radii.resize(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) {
-            const uint32_t src = handles[i].index;
-            index.order[i] = src;
-            index.positions[i] = positions[src];
-            if (radii) index.radii[i] = radii[src];
-        }
-    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i) {
+                              const uint32_t src = handles[i].index;
+                              index.order[i] = src;
+                              index.positions[i] = positions[src];
+                              if (radii) index.radii[i] = radii[src];
+                          }
+                      });
     for (size_t i = 0; i < n; ++i)
         if (i == 0 || handles[i].key != handles[i - 1].key) {
             index.keys.push_back(handles[i].key);

@@ -21,7 +21,7 @@ namespace neighbors {
 /// Cells per axis are limited to 2^21 (21 bits per axis in a 63-bit Morton key).
 constexpr uint32_t kMaxCellsPerAxis = 1u << 21;
 
-uint64_t mortonKey(uint32_t cx, uint32_t cy, uint32_t cz);  ///< x in the lowest bit
+uint64_t mortonKey(uint32_t cx, uint32_t cy, uint32_t cz); ///< x in the lowest bit
 
 struct CellRange
 {
@@ -32,15 +32,15 @@ struct CellRange
 struct CellIndex
 {
     double cellSize = 0;
-    double origin[3] = {0, 0, 0};  ///< world position of the corner of cell (0,0,0)
-    uint32_t dims[3] = {0, 0, 0};  ///< cells per axis covering the particles
-    std::vector<uint64_t> keys;    ///< occupied cells, ascending Morton keys
-    std::vector<uint32_t> starts;  ///< keys.size() + 1 offsets into the sorted particle arrays
-    std::vector<Vec3f> positions;  ///< particles in cell order
-    std::vector<float> radii;      ///< per-particle radii in cell order; empty: uniform radius
-    std::vector<uint32_t> order;   ///< cell order -> index in the input
-    std::vector<uint64_t> tableKeys;   ///< hash table: key, or kEmptyKey
-    std::vector<uint32_t> tableCells;  ///< hash table: position of the key in keys
+    double origin[3] = {0, 0, 0};     ///< world position of the corner of cell (0,0,0)
+    uint32_t dims[3] = {0, 0, 0};     ///< cells per axis covering the particles
+    std::vector<uint64_t> keys;       ///< occupied cells, ascending Morton keys
+    std::vector<uint32_t> starts;     ///< keys.size() + 1 offsets into the sorted particle arrays
+    std::vector<Vec3f> positions;     ///< particles in cell order
+    std::vector<float> radii;         ///< per-particle radii in cell order; empty: uniform radius
+    std::vector<uint32_t> order;      ///< cell order -> index in the input
+    std::vector<uint64_t> tableKeys;  ///< hash table: key, or kEmptyKey
+    std::vector<uint32_t> tableCells; ///< hash table: position of the key in keys
     static constexpr uint64_t kEmptyKey = ~uint64_t(0);
 
     /// (Re)build the hash table from keys.
@@ -58,8 +58,7 @@ struct CellIndex
 
     /// Calls f(begin, end) for every occupied cell overlapping the world box [lo, hi], in
     /// ascending (z, y, x) cell order (deterministic).
-    template <typename F>
-    void forEachCellInBox(const double lo[3], const double hi[3], F&& f) const
+    template <typename F> void forEachCellInBox(const double lo[3], const double hi[3], F&& f) const
     {
         int64_t c0[3], c1[3];
         for (int a = 0; a < 3; ++a) {

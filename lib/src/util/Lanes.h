@@ -9,7 +9,7 @@
 namespace fluidsurf {
 namespace util {
 
-constexpr int kLanes = 4;  // one SSE register: the field kernel's 14 accumulators fit in 16
+constexpr int kLanes = 4; // one SSE register: the field kernel's 14 accumulators fit in 16
 typedef float Lanes __attribute__((vector_size(kLanes * sizeof(float))));
 
 inline Lanes loadLanes(const float* p)

@@ -16,10 +16,11 @@ int main(int argc, char** argv)
     p.count = 1000;
     fluidsurf::io::writeParticles(fluidsurf::generateScene(fluidsurf::Scene::Block, p), argv[1]);
     const fluidsurf::ParticleSet ps = fluidsurf::io::readParticles(argv[1]);
-    const fluidsurf::RasterizeResult res = fluidsurf::rasterizeParticles(ps, fluidsurf::Params::fromRadius(p.radius));
+    const fluidsurf::RasterizeResult res =
+        fluidsurf::rasterizeParticles(ps, fluidsurf::Params::fromRadius(p.radius));
     const fluidsurf::TriangleMesh mesh = fluidsurf::meshLevelSet(*res.grid);
     const fluidsurf::MeshReport report = fluidsurf::checkMesh(mesh);
-    std::printf("downstream read %zu particles with fluidsurf %s; mesh: %s\n", ps.size(), FLUIDSURF_VERSION_STRING,
-                fluidsurf::describe(report).c_str());
+    std::printf("downstream read %zu particles with fluidsurf %s; mesh: %s\n", ps.size(),
+                FLUIDSURF_VERSION_STRING, fluidsurf::describe(report).c_str());
     return ps.size() == 1000 && report.watertight() && report.volume > 0 ? 0 : 1;
 }

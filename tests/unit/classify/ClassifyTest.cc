@@ -10,7 +10,8 @@ using namespace fluidsurf;
 using namespace fluidsurf::test;
 
 namespace {
-classify::Classification classifyScene(const ParticleSet& ps, const Params& p, neighbors::CellIndex& index)
+classify::Classification classifyScene(const ParticleSet& ps, const Params& p,
+                                       neighbors::CellIndex& index)
 {
     index = neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength);
     return classify::classifyParticles(index, p);
@@ -34,9 +35,9 @@ TEST(Classify, LatticeBlockOuterLayerIsSurfaceAndNothingElse)
             onFace |= cell == 0 || cell == 9;
         }
         outer += onFace;
-        EXPECT_EQ(classify::isSurface(c.classes[i]), onFace) << "particle at " << q.x << " " << q.y << " " << q.z
-                                                              << " cf " << c.colorField[i] << " grad "
-                                                              << c.colorGradient[i] << " n " << c.neighbours[i];
+        EXPECT_EQ(classify::isSurface(c.classes[i]), onFace)
+            << "particle at " << q.x << " " << q.y << " " << q.z << " cf " << c.colorField[i]
+            << " grad " << c.colorGradient[i] << " n " << c.neighbours[i];
     }
     EXPECT_EQ(outer, 1000u - 8 * 8 * 8);
     EXPECT_EQ(c.surface + c.splash, outer);
@@ -60,9 +61,11 @@ TEST(Classify, NeighbourCountsMatchBruteForce)
     neighbors::CellIndex index;
     const classify::Classification c = classifyScene(ps, p, index);
     std::vector<std::array<double, 3>> pts;
-    for (const Vec3f& v : ps.positions) pts.push_back({v.x, v.y, v.z});
+    for (const Vec3f& v : ps.positions)
+        pts.push_back({v.x, v.y, v.z});
     const std::vector<int> expected = referenceNeighbourCounts(pts, p.smoothingLength);
-    for (size_t i = 0; i < index.size(); ++i) ASSERT_EQ(int(c.neighbours[i]), expected[index.order[i]]) << i;
+    for (size_t i = 0; i < index.size(); ++i)
+        ASSERT_EQ(int(c.neighbours[i]), expected[index.order[i]]) << i;
     EXPECT_EQ(c.isolated, 4u) << "the drop scene's droplets";
     for (size_t i = 0; i < index.size(); ++i)
         EXPECT_EQ(c.classes[i] == classify::Isolated, expected[index.order[i]] == 0);

@@ -18,7 +18,8 @@ namespace fluidsurf {
 namespace {
 
 /// CPU and CUDA grids of the same particles and parameters agree.
-void expectSameField(const ParticleSet& ps, Params p, const std::string& what, bool devicePipeline = true)
+void expectSameField(const ParticleSet& ps, Params p, const std::string& what,
+                     bool devicePipeline = true)
 {
     p.device = Device::Cpu;
     const RasterizeResult cpu = rasterizeParticles(ps, p, what);
@@ -27,8 +28,11 @@ void expectSameField(const ParticleSet& ps, Params p, const std::string& what, b
     EXPECT_NE(gpu.stats.device, "cpu") << what;
     // The narrow band must have run on the device from the sort on, not only its gather.
     bool deviceClassify = false;
-    for (const StageTime& st : gpu.stats.gpuStages) deviceClassify |= st.name == "classify";
-    EXPECT_EQ(deviceClassify, devicePipeline && p.method == FieldMethod::NarrowBand && ps.size() > 0) << what;
+    for (const StageTime& st : gpu.stats.gpuStages)
+        deviceClassify |= st.name == "classify";
+    EXPECT_EQ(deviceClassify,
+              devicePipeline && p.method == FieldMethod::NarrowBand && ps.size() > 0)
+        << what;
     EXPECT_EQ(gpu.stats.interior, cpu.stats.interior) << what;
     EXPECT_EQ(gpu.stats.surface, cpu.stats.surface) << what;
     EXPECT_EQ(gpu.stats.splash, cpu.stats.splash) << what;
@@ -36,7 +40,8 @@ void expectSameField(const ParticleSet& ps, Params p, const std::string& what, b
     EXPECT_EQ(gpu.isolatedParticles, cpu.isolatedParticles) << what;
     EXPECT_EQ(gpu.stats.bandCompletion, cpu.stats.bandCompletion) << what;
     EXPECT_EQ(gpu.stats.fieldEvaluations, cpu.stats.fieldEvaluations) << what;
-    ASSERT_TRUE(cpu.grid->tree().hasSameTopology(gpu.grid->tree())) << what << ": active topology differs";
+    ASSERT_TRUE(cpu.grid->tree().hasSameTopology(gpu.grid->tree()))
+        << what << ": active topology differs";
     auto acc = gpu.grid->getConstAccessor();
     double worst = 0;
     size_t signFlips = 0, n = 0;
@@ -45,9 +50,11 @@ void expectSameField(const ParticleSet& ps, Params p, const std::string& what, b
         worst = std::max(worst, double(std::abs(a - b)));
         if (std::abs(a) > 1e-5 * p.radius && (a < 0) != (b < 0)) ++signFlips;
     }
-    EXPECT_LE(worst, 1e-5 * p.radius) << what << ": largest difference " << worst / p.radius << " r over " << n << " voxels";
+    EXPECT_LE(worst, 1e-5 * p.radius)
+        << what << ": largest difference " << worst / p.radius << " r over " << n << " voxels";
     EXPECT_EQ(signFlips, 0u) << what << ": zero crossings differ";
-    ::testing::Test::RecordProperty(what + "_worst_difference_in_r", std::to_string(worst / p.radius));
+    ::testing::Test::RecordProperty(what + "_worst_difference_in_r",
+                                    std::to_string(worst / p.radius));
 }
 
 TEST(FieldCuda, MatchesCpuOnRealFrames)
@@ -55,7 +62,8 @@ TEST(FieldCuda, MatchesCpuOnRealFrames)
     FLUIDSURF_REQUIRE_GPU();
     FLUIDSURF_REQUIRE_SHARED_DATA();
     for (const test::RealFrame& f : test::kRealFrames)
-        expectSameField(io::readParticles(test::sharedData() + "/real/" + f.name), Params::fromRadius(f.radius), f.name);
+        expectSameField(io::readParticles(test::sharedData() + "/real/" + f.name),
+                        Params::fromRadius(f.radius), f.name);
 }
 
 TEST(FieldCuda, MatchesCpuOnGeneratedScenesAndSettings)
@@ -69,7 +77,9 @@ TEST(FieldCuda, MatchesCpuOnGeneratedScenesAndSettings)
             for (double support : {4.0, 8.0}) {
                 Params p = Params::fromRadius(sp.radius);
                 p.voxelSize = voxel * sp.radius, p.influenceRadius = support * sp.radius;
-                expectSameField(ps, p, std::string(sceneName(scene)) + "_voxel" + std::to_string(voxel) + "_R" + std::to_string(support));
+                expectSameField(ps, p,
+                                std::string(sceneName(scene)) + "_voxel" + std::to_string(voxel) +
+                                    "_R" + std::to_string(support));
             }
         Params zb = Params::fromRadius(sp.radius);
         zb.field = FieldKind::Zb05;
@@ -83,7 +93,8 @@ TEST(FieldCuda, MatchesCpuOnGeneratedScenesAndSettings)
     Attribute pscale;
     pscale.name = "pscale";
     pscale.floats.resize(ps.size());
-    for (size_t i = 0; i < ps.size(); ++i) pscale.floats[i] = float(sp.radius * (0.8 + 0.4 * double(i % 7) / 6));
+    for (size_t i = 0; i < ps.size(); ++i)
+        pscale.floats[i] = float(sp.radius * (0.8 + 0.4 * double(i % 7) / 6));
     ps.attributes.push_back(pscale);
     Params p = Params::fromRadius(sp.radius);
     p.keepIsolated = true;
@@ -105,14 +116,17 @@ TEST(FieldCuda, MatchesCpuOnSparseAndDegenerateFrames)
         const std::string k = keep ? "_kept" : "_dropped";
         expectSameField(frame({Vec3f(0.1f, 0.2f, 0.3f)}), p, "one_particle" + k);
         // All isolated: with the particles dropped the band is empty.
-        expectSameField(frame({Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0), Vec3f(-3, -2, 5)}), p, "isolated" + k);
+        expectSameField(frame({Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0), Vec3f(-3, -2, 5)}),
+                        p, "isolated" + k);
         // A pair (splash) plus a far isolated particle, at negative coordinates.
-        expectSameField(frame({Vec3f(-5, -5, -5), Vec3f(-5.04f, -5, -5), Vec3f(7, 7, 7)}), p, "pair" + k);
+        expectSameField(frame({Vec3f(-5, -5, -5), Vec3f(-5.04f, -5, -5), Vec3f(7, 7, 7)}), p,
+                        "pair" + k);
     }
     // A particle exactly on leaf and cell boundaries, and lattice rows at spacing 2r.
     std::vector<Vec3f> lattice;
     for (int i = 0; i < 20; ++i)
-        for (int j = 0; j < 3; ++j) lattice.push_back(Vec3f(float(i * 2 * r), float(j * 2 * r), 0.2f));
+        for (int j = 0; j < 3; ++j)
+            lattice.push_back(Vec3f(float(i * 2 * r), float(j * 2 * r), 0.2f));
     expectSameField(frame(lattice), Params::fromRadius(r), "lattice_rows");
 }
 
@@ -125,7 +139,8 @@ TEST(FieldCuda, FarFromTheOriginTheCpuBandIsUsed)
     ParticleSet ps;
     for (int i = 0; i < 12; ++i)
         for (int j = 0; j < 12; ++j)
-            for (int k = 0; k < 12; ++k) ps.positions.push_back(Vec3f(9e6f + 2.f * i, 2.f * j, 2.f * k));
+            for (int k = 0; k < 12; ++k)
+                ps.positions.push_back(Vec3f(9e6f + 2.f * i, 2.f * j, 2.f * k));
     expectSameField(ps, Params::fromRadius(1.0), "far_block", false);
 }
 

@@ -30,26 +30,30 @@ struct Reference
     Reference(const ParticleSet& ps, const Params& p)
     {
         Points all;
-        for (const Vec3f& v : ps.positions) all.push_back({v.x, v.y, v.z});
+        for (const Vec3f& v : ps.positions)
+            all.push_back({v.x, v.y, v.z});
         const std::vector<int> counts = referenceNeighbourCounts(all, p.smoothingLength);
         const Attribute* ra = p.perParticleRadii ? ps.find(AttributeRole::Radius) : nullptr;
         std::vector<size_t> keep;
         for (size_t i = 0; i < all.size(); ++i)
             if (counts[i] > 0 || p.keepIsolated) keep.push_back(i);
-        std::sort(keep.begin(), keep.end(), [&](size_t a, size_t b) { return all[a][0] < all[b][0]; });
+        std::sort(keep.begin(), keep.end(),
+                  [&](size_t a, size_t b) { return all[a][0] < all[b][0]; });
         for (size_t i : keep) {
             pts.push_back(all[i]);
             if (ra) radii.push_back(ra->floats[i]);
         }
-        params = {p.radius, p.influenceRadius, p.smoothingLength, p.tLow, p.tHigh, p.background(),
-                  p.field == FieldKind::Ssp07};
+        params = {p.radius, p.influenceRadius, p.smoothingLength,          p.tLow,
+                  p.tHigh,  p.background(),    p.field == FieldKind::Ssp07};
     }
 
     double phi(const std::array<double, 3>& x) const
     {
         const double R = params.influence;
-        auto lo = std::lower_bound(pts.begin(), pts.end(), x[0] - R, [](const auto& p, double v) { return p[0] < v; });
-        auto hi = std::upper_bound(pts.begin(), pts.end(), x[0] + R, [](double v, const auto& p) { return v < p[0]; });
+        auto lo = std::lower_bound(pts.begin(), pts.end(), x[0] - R,
+                                   [](const auto& p, double v) { return p[0] < v; });
+        auto hi = std::upper_bound(pts.begin(), pts.end(), x[0] + R,
+                                   [](double v, const auto& p) { return v < p[0]; });
         const size_t b = size_t(lo - pts.begin()), e = size_t(hi - pts.begin());
         Points slab(lo, hi);
         std::vector<double> r;
@@ -59,8 +63,8 @@ struct Reference
 };
 
 /// Compare every active voxel (or an even sample of maxVoxels) with the reference.
-void expectMatchesReference(const openvdb::FloatGrid& grid, const Reference& ref, const Params& p, const std::string& what,
-                            size_t maxVoxels = 40000)
+void expectMatchesReference(const openvdb::FloatGrid& grid, const Reference& ref, const Params& p,
+                            const std::string& what, size_t maxVoxels = 40000)
 {
     const size_t active = grid.activeVoxelCount();
     const size_t stride = std::max<size_t>(1, (active + maxVoxels - 1) / maxVoxels);
@@ -69,7 +73,8 @@ void expectMatchesReference(const openvdb::FloatGrid& grid, const Reference& ref
     for (auto it = grid.cbeginValueOn(); it; ++it, ++n) {
         if (n % stride) continue;
         const openvdb::Coord c = it.getCoord();
-        const double expected = ref.phi({c.x() * p.voxelSize, c.y() * p.voxelSize, c.z() * p.voxelSize});
+        const double expected =
+            ref.phi({c.x() * p.voxelSize, c.y() * p.voxelSize, c.z() * p.voxelSize});
         const double err = std::abs(double(*it) - expected);
         worst = std::max(worst, err);
         if (err > 1e-5 * p.radius && bad++ < 5)
@@ -90,7 +95,8 @@ struct Containment
     double maxPhi = -1e30;
 };
 
-Containment containment(const openvdb::FloatGrid& grid, const ParticleSet& ps, const std::vector<uint32_t>& isolated)
+Containment containment(const openvdb::FloatGrid& grid, const ParticleSet& ps,
+                        const std::vector<uint32_t>& isolated)
 {
     openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sampler(grid);
     Containment c;
@@ -109,11 +115,12 @@ Containment containment(const openvdb::FloatGrid& grid, const ParticleSet& ps, c
     return c;
 }
 
-void expectParticlesInside(const openvdb::FloatGrid& grid, const ParticleSet& ps, const std::vector<uint32_t>& isolated,
-                           const std::string& what)
+void expectParticlesInside(const openvdb::FloatGrid& grid, const ParticleSet& ps,
+                           const std::vector<uint32_t>& isolated, const std::string& what)
 {
     const Containment c = containment(grid, ps, isolated);
-    EXPECT_EQ(c.outside, 0u) << what << ": particle centres outside the surface (max phi " << c.maxPhi << ")";
+    EXPECT_EQ(c.outside, 0u) << what << ": particle centres outside the surface (max phi "
+                             << c.maxPhi << ")";
     EXPECT_GT(c.checked, 0u) << what;
 }
 
@@ -160,7 +167,8 @@ TEST(FieldReference, RealFramesKeepTheirParticlesInside)
         const ParticleSet ps = io::readParticles(sharedData() + "/real/" + f.name);
         const RasterizeResult res = rasterizeParticles(ps, Params::fromRadius(f.radius), f.name);
         const Containment c = containment(*res.grid, ps, res.isolatedParticles);
-        EXPECT_LE(c.outside, c.checked / (f.fluid ? 200 : 20)) << f.name << ": " << c.outside << " of " << c.checked;
+        EXPECT_LE(c.outside, c.checked / (f.fluid ? 200 : 20))
+            << f.name << ": " << c.outside << " of " << c.checked;
         EXPECT_LE(c.maxPhi, 0.2 * f.radius) << f.name;
     }
 }
@@ -179,7 +187,8 @@ TEST(FieldReference, GeneratedScenesHaveNoParticleOutside)
 TEST(FieldReference, Zb05MatchesBruteForce)
 {
     FLUIDSURF_REQUIRE_SHARED_DATA();
-    const ParticleSet ps = io::readParticles(sharedData() + "/real/dam_break_frame_9_6859_particles.bgeo");
+    const ParticleSet ps =
+        io::readParticles(sharedData() + "/real/dam_break_frame_9_6859_particles.bgeo");
     Params p = Params::fromRadius(0.025);
     p.field = FieldKind::Zb05;
     const RasterizeResult res = rasterizeParticles(ps, p);
@@ -199,7 +208,8 @@ static void otherVoxelSizesAndSupports(Device device)
             p.influenceRadius = support * sp.radius;
             p.device = device;
             const RasterizeResult res = rasterizeParticles(ps, p);
-            const std::string what = "voxel " + std::to_string(voxel) + "r R " + std::to_string(support) + "r";
+            const std::string what =
+                "voxel " + std::to_string(voxel) + "r R " + std::to_string(support) + "r";
             expectMatchesReference(*res.grid, Reference(ps, p), p, what, 20000);
             // With R = 8r the centroid of a lattice corner lies more than r inside it, so the
             // exact field rounds corners off past their particles: containment holds at 4r only.
@@ -207,7 +217,10 @@ static void otherVoxelSizesAndSupports(Device device)
         }
 }
 
-TEST(FieldReference, OtherVoxelSizesAndSupports) { otherVoxelSizesAndSupports(Device::Cpu); }
+TEST(FieldReference, OtherVoxelSizesAndSupports)
+{
+    otherVoxelSizesAndSupports(Device::Cpu);
+}
 
 TEST(FieldReferenceCuda, OtherVoxelSizesAndSupports)
 {
@@ -220,20 +233,21 @@ static void singleParticleIsASphere(Device device)
     SceneParams sp;
     sp.radius = 0.1;
     ParticleSet ps = generateScene(Scene::Single, sp);
-    ps.positions[0] = Vec3f(0.0137f, -0.271f, 1.5f);  // off the grid
+    ps.positions[0] = Vec3f(0.0137f, -0.271f, 1.5f); // off the grid
     Params p = Params::fromRadius(sp.radius);
     p.keepIsolated = true;
     p.device = device;
     const RasterizeResult res = rasterizeParticles(ps, p);
-    EXPECT_GE(res.grid->activeVoxelCount(), 64u);  // +-2r around it at voxel r
+    EXPECT_GE(res.grid->activeVoxelCount(), 64u); // +-2r around it at voxel r
     const Vec3f c = ps.positions[0];
     size_t n = 0;
     bool inside = false, outside = false;
     for (auto it = res.grid->cbeginValueOn(); it; ++it, ++n) {
         const openvdb::Vec3d x = res.grid->indexToWorld(it.getCoord());
-        const double d = std::sqrt((x[0] - c.x) * (x[0] - c.x) + (x[1] - c.y) * (x[1] - c.y) + (x[2] - c.z) * (x[2] - c.z));
+        const double d = std::sqrt((x[0] - c.x) * (x[0] - c.x) + (x[1] - c.y) * (x[1] - c.y) +
+                                   (x[2] - c.z) * (x[2] - c.z));
         ASSERT_NEAR(*it, d - sp.radius, 1e-5 * sp.radius) << it.getCoord();
-        inside |= *it < 0, outside |= *it > 0;
+        inside |= *it<0, outside |= *it> 0;
     }
     EXPECT_TRUE(inside && outside) << "the band must contain the zero crossing";
     // Left out by default: an isolated particle is not part of the grid.
@@ -243,7 +257,10 @@ static void singleParticleIsASphere(Device device)
     ASSERT_EQ(left.isolatedParticles.size(), 1u);
 }
 
-TEST(FieldReference, SingleParticleIsASphereOfRadiusR) { singleParticleIsASphere(Device::Cpu); }
+TEST(FieldReference, SingleParticleIsASphereOfRadiusR)
+{
+    singleParticleIsASphere(Device::Cpu);
+}
 
 TEST(FieldReferenceCuda, SingleParticleIsASphereOfRadiusR)
 {
@@ -256,7 +273,7 @@ TEST(FieldReference, LatticeSlabIsAPlane)
     SceneParams sp;
     sp.count = 40 * 40 * 4;
     sp.layers = 4;
-    sp.jitter = 0;  // a pure lattice
+    sp.jitter = 0; // a pure lattice
     const ParticleSet ps = generateScene(Scene::Slab, sp);
     const Params p = Params::fromRadius(sp.radius);
     const RasterizeResult res = rasterizeParticles(ps, p);

@@ -28,7 +28,8 @@ RasterizeResult run(const ParticleSet& ps, FieldMethod method, double r = 0.025)
 
 /// Every sign change between axis neighbours of the full grid lies between two narrow-band
 /// voxels with the same signs: the same zero crossings, and none elsewhere (no double layer).
-void expectSameZeroCrossings(const openvdb::FloatGrid& band, const openvdb::FloatGrid& full, const std::string& what)
+void expectSameZeroCrossings(const openvdb::FloatGrid& band, const openvdb::FloatGrid& full,
+                             const std::string& what)
 {
     auto b = band.getConstAccessor();
     auto f = full.getConstAccessor();
@@ -43,7 +44,8 @@ void expectSameZeroCrossings(const openvdb::FloatGrid& band, const openvdb::Floa
             ++crossings;
             const bool ok = b.isValueOn(c) && b.isValueOn(n) && (b.getValue(c) < 0) == (v0 < 0) &&
                             (b.getValue(n) < 0) == (v1 < 0);
-            if (!ok && missing++ < 5) ADD_FAILURE() << what << ": crossing " << c << " -> " << n << " not in the band";
+            if (!ok && missing++ < 5)
+                ADD_FAILURE() << what << ": crossing " << c << " -> " << n << " not in the band";
         }
     }
     EXPECT_EQ(missing, 0u) << what;
@@ -54,17 +56,21 @@ void expectSameZeroCrossings(const openvdb::FloatGrid& band, const openvdb::Floa
 
 TEST(Methods, NarrowBandEqualsGatherFullOnItsVoxels)
 {
-    for (const char* name : {"dam_break_frame_9_6859_particles.bgeo", "double_dam_break_frame_26_4732_particles.vtk"}) {
+    for (const char* name : {"dam_break_frame_9_6859_particles.bgeo",
+                             "double_dam_break_frame_26_4732_particles.vtk"}) {
         const ParticleSet ps = testFrame(name);
-        const RasterizeResult band = run(ps, FieldMethod::NarrowBand), full = run(ps, FieldMethod::GatherFull);
+        const RasterizeResult band = run(ps, FieldMethod::NarrowBand),
+                              full = run(ps, FieldMethod::GatherFull);
         auto f = full.grid->getConstAccessor();
         size_t differ = 0;
         for (auto it = band.grid->cbeginValueOn(); it; ++it)
             if (*it != f.getValue(it.getCoord()) && differ++ < 5)
-                ADD_FAILURE() << name << ": " << it.getCoord() << " band " << *it << " full " << f.getValue(it.getCoord());
+                ADD_FAILURE() << name << ": " << it.getCoord() << " band " << *it << " full "
+                              << f.getValue(it.getCoord());
         EXPECT_EQ(differ, 0u) << "values must be bitwise identical";
         expectSameZeroCrossings(*band.grid, *full.grid, name);
-        EXPECT_LT(band.stats.fieldEvaluations * 3, full.stats.fieldEvaluations) << "the band is a fraction of the volume";
+        EXPECT_LT(band.stats.fieldEvaluations * 3, full.stats.fieldEvaluations)
+            << "the band is a fraction of the volume";
     }
 }
 
@@ -80,15 +86,18 @@ TEST(Methods, ScatterMatchesGatherFull)
         const RasterizeResult full = rasterizeParticles(ps, p);
         p.method = FieldMethod::Scatter;
         const RasterizeResult scatter = rasterizeParticles(ps, p);
-        EXPECT_EQ(full.stats.fieldEvaluations, scatter.stats.fieldEvaluations) << "same bounding volume";
+        EXPECT_EQ(full.stats.fieldEvaluations, scatter.stats.fieldEvaluations)
+            << "same bounding volume";
         auto s = scatter.grid->getConstAccessor();
         double worst = 0;
         for (auto it = full.grid->cbeginValueOn(); it; ++it)
             worst = std::max(worst, double(std::abs(*it - s.getValue(it.getCoord()))));
         for (auto it = scatter.grid->cbeginValueOn(); it; ++it)
-            worst = std::max(worst, double(std::abs(*it - full.grid->tree().getValue(it.getCoord()))));
+            worst =
+                std::max(worst, double(std::abs(*it - full.grid->tree().getValue(it.getCoord()))));
         EXPECT_LE(worst, 1e-5 * sp.radius) << fieldName(field);
-        expectSameZeroCrossings(*rasterizeParticles(ps, Params::fromRadius(sp.radius)).grid, *scatter.grid, "scatter");
+        expectSameZeroCrossings(*rasterizeParticles(ps, Params::fromRadius(sp.radius)).grid,
+                                *scatter.grid, "scatter");
     }
 }
 
@@ -101,7 +110,8 @@ TEST(Methods, OutputIsByteIdenticalWithOneAndTwoThreads)
         const RasterizeResult res = run(ps, FieldMethod::NarrowBand);
         writeLevelSet({res.grid}, dir.path(std::to_string(threads) + ".vdb"));
     }
-    const std::string one = readFileBytes(dir.path("1.vdb")), two = readFileBytes(dir.path("2.vdb"));
+    const std::string one = readFileBytes(dir.path("1.vdb")),
+                      two = readFileBytes(dir.path("2.vdb"));
     EXPECT_GT(one.size(), 10000u);
     EXPECT_TRUE(one == two) << "the .vdb differs between 1 and 2 threads";
 }

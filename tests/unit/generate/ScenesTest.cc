@@ -38,13 +38,15 @@ TEST(Scenes, SingleBlockAndBall)
     EXPECT_EQ(block.positions.back(), Vec3f(9.f, 9.f, 9.f)) << "spacing is 2r";
     const ParticleSet ball = generateScene(Scene::Ball, p);
     const double rho = std::cbrt(3.0 * 1000 / (4 * M_PI)) * 2 * p.radius;
-    size_t expected = 0;  // brute-force lattice count
+    size_t expected = 0; // brute-force lattice count
     const int m = int(std::ceil(rho));
     for (int i = -m; i <= m; ++i)
         for (int j = -m; j <= m; ++j)
-            for (int k = -m; k <= m; ++k) expected += (i * i + j * j + k * k) * 1.0 <= rho * rho;
+            for (int k = -m; k <= m; ++k)
+                expected += (i * i + j * j + k * k) * 1.0 <= rho * rho;
     EXPECT_EQ(ball.size(), expected);
-    for (const Vec3f& q : ball.positions) ASSERT_LE(dist(q, Vec3f()), rho + 1e-6);
+    for (const Vec3f& q : ball.positions)
+        ASSERT_LE(dist(q, Vec3f()), rho + 1e-6);
     EXPECT_EQ(ball.find(AttributeRole::Id)->ints.back(), int64_t(ball.size() - 1));
 }
 
@@ -72,7 +74,8 @@ TEST(Scenes, DropDropletsHaveNoNeighbourWithinTheSupport)
     int isolated = 0;
     for (size_t i = 0; i < s.size(); ++i) {
         bool alone = true;
-        for (size_t j = 0; j < s.size() && alone; ++j) alone = i == j || dist(s.positions[i], s.positions[j]) >= h;
+        for (size_t j = 0; j < s.size() && alone; ++j)
+            alone = i == j || dist(s.positions[i], s.positions[j]) >= h;
         isolated += alone;
     }
     EXPECT_EQ(isolated, 5);

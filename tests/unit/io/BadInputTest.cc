@@ -32,35 +32,49 @@ std::string validFile(ParticleFormat f, const ParticleSet& ps)
         return readFileBytes(dir.path(std::string("f") + ext));
     };
     switch (f) {
-    case ParticleFormat::Bgeo: return viaWriter(".bgeo");
-    case ParticleFormat::Ply: return viaWriter(".ply");
-    case ParticleFormat::VtkLegacy: return viaWriter(".vtk");
-    case ParticleFormat::VdbPoints: return viaWriter(".vdb");
-    case ParticleFormat::Xyz: return viaWriter(".xyz");
+    case ParticleFormat::Bgeo:
+        return viaWriter(".bgeo");
+    case ParticleFormat::Ply:
+        return viaWriter(".ply");
+    case ParticleFormat::VtkLegacy:
+        return viaWriter(".vtk");
+    case ParticleFormat::VdbPoints:
+        return viaWriter(".vdb");
+    case ParticleFormat::Xyz:
+        return viaWriter(".xyz");
     case ParticleFormat::Npy: {
-        std::string dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (" + std::to_string(ps.size()) + ", 3), }";
-        while ((10 + dict.size() + 1) % 64) dict += ' ';
+        std::string dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (" +
+                           std::to_string(ps.size()) + ", 3), }";
+        while ((10 + dict.size() + 1) % 64)
+            dict += ' ';
         dict += '\n';
         ByteBuilder b;
         b.text("\x93NUMPY").le(uint8_t(1)).le(uint8_t(0)).le(uint16_t(dict.size())).text(dict);
-        for (const Vec3f& p : ps.positions) b.le(p.x).le(p.y).le(p.z);
+        for (const Vec3f& p : ps.positions)
+            b.le(p.x).le(p.y).le(p.z);
         return b.s;
     }
     case ParticleFormat::VtkXml: {
         ByteBuilder data;
         data.le(uint32_t(ps.size() * 12));
-        for (const Vec3f& p : ps.positions) data.le(p.x).le(p.y).le(p.z);
-        return "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n<PolyData>\n<Piece NumberOfPoints=\"" +
-               std::to_string(ps.size()) + "\">\n<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" "
-               "format=\"appended\" offset=\"0\"/></Points>\n</Piece>\n</PolyData>\n<AppendedData encoding=\"raw\">_" +
+        for (const Vec3f& p : ps.positions)
+            data.le(p.x).le(p.y).le(p.z);
+        return "<VTKFile type=\"PolyData\" version=\"0.1\" "
+               "byte_order=\"LittleEndian\">\n<PolyData>\n<Piece NumberOfPoints=\"" +
+               std::to_string(ps.size()) +
+               "\">\n<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" "
+               "format=\"appended\" offset=\"0\"/></Points>\n</Piece>\n</PolyData>\n<AppendedData "
+               "encoding=\"raw\">_" +
                data.s + "</AppendedData>\n</VTKFile>\n";
     }
     case ParticleFormat::Csv: {
         std::string s = "x,y,z\n";
-        for (const Vec3f& p : ps.positions) s += std::to_string(p.x) + "," + std::to_string(p.y) + "," + std::to_string(p.z) + "\n";
+        for (const Vec3f& p : ps.positions)
+            s += std::to_string(p.x) + "," + std::to_string(p.y) + "," + std::to_string(p.z) + "\n";
         return s;
     }
-    default: return "";
+    default:
+        return "";
     }
 }
 
@@ -68,7 +82,7 @@ struct FormatCase
 {
     ParticleFormat format;
     const char* name;
-    bool binary;  // a cut file must be an error (text may still parse as fewer particles)
+    bool binary; // a cut file must be an error (text may still parse as fewer particles)
 };
 
 const FormatCase kFormats[] = {
@@ -78,13 +92,16 @@ const FormatCase kFormats[] = {
     {ParticleFormat::Xyz, "xyz", false},      {ParticleFormat::Csv, "csv", false},
 };
 
-class BadInput : public ::testing::TestWithParam<FormatCase> {};
+class BadInput : public ::testing::TestWithParam<FormatCase>
+{
+};
 
 void expectInputError(const std::string& bytes, ParticleFormat f, const std::string& what)
 {
     const std::string msg = readError(bytes, f);
     EXPECT_FALSE(msg.empty()) << what << ": read without error";
-    EXPECT_EQ(msg.rfind("test-input", 0), 0u) << what << ": message does not name the source: " << msg;
+    EXPECT_EQ(msg.rfind("test-input", 0), 0u)
+        << what << ": message does not name the source: " << msg;
 }
 
 } // namespace
@@ -118,7 +135,8 @@ TEST_P(BadInput, EmptyFile)
 TEST_P(BadInput, WrongMagic)
 {
     const FormatCase c = GetParam();
-    if (c.format == ParticleFormat::Xyz || c.format == ParticleFormat::Csv) GTEST_SKIP() << "no magic in this format";
+    if (c.format == ParticleFormat::Xyz || c.format == ParticleFormat::Csv)
+        GTEST_SKIP() << "no magic in this format";
     std::string file = validFile(c.format, smallSet());
     file[0] = 'Q';
     file[1] = 'Z';
@@ -129,7 +147,8 @@ TEST_P(BadInput, ZeroParticles)
 {
     const FormatCase c = GetParam();
     const std::string file = validFile(c.format, ParticleSet());
-    EXPECT_NE(readError(file, c.format).find("no particles"), std::string::npos) << readError(file, c.format);
+    EXPECT_NE(readError(file, c.format).find("no particles"), std::string::npos)
+        << readError(file, c.format);
     io::ReadOptions allow;
     allow.allowEmpty = true;
     EXPECT_EQ(readBytes(file, c.format, allow).size(), 0u);
@@ -161,7 +180,8 @@ TEST_P(BadInput, NonFiniteCoordinatesRejectedOrDroppedWhenAsked)
     drop.dropNonFinite = true;
     const ParticleSet back = readBytes(file, c.format, drop);
     EXPECT_EQ(back.size(), ps.size() - 2);
-    for (const Attribute& a : back.attributes) EXPECT_EQ(a.size(), back.size() * a.components);
+    for (const Attribute& a : back.attributes)
+        EXPECT_EQ(a.size(), back.size() * a.components);
 }
 
 INSTANTIATE_TEST_SUITE_P(Readers, BadInput, ::testing::ValuesIn(kFormats),
@@ -182,7 +202,8 @@ TEST(BadInputHeaders, PromisedCountsBeyondTheData)
         expectInputError(ply, ParticleFormat::Ply, "ply vertex " + n);
 
         std::string vtu = validFile(ParticleFormat::VtkXml, ps);
-        vtu = std::regex_replace(vtu, std::regex("NumberOfPoints=\"64\""), "NumberOfPoints=\"" + n + "\"");
+        vtu = std::regex_replace(vtu, std::regex("NumberOfPoints=\"64\""),
+                                 "NumberOfPoints=\"" + n + "\"");
         expectInputError(vtu, ParticleFormat::VtkXml, "vtu NumberOfPoints " + n);
 
         std::string npy = validFile(ParticleFormat::Npy, ps);
@@ -192,7 +213,8 @@ TEST(BadInputHeaders, PromisedCountsBeyondTheData)
     // BGEO: the point count is a big-endian int32 at byte 9.
     for (uint32_t n : {65u, 0x7fffffffu, 0x80000000u}) {
         std::string bgeo = validFile(ParticleFormat::Bgeo, ps);
-        for (int i = 0; i < 4; ++i) bgeo[9 + i] = char(n >> (24 - 8 * i));
+        for (int i = 0; i < 4; ++i)
+            bgeo[9 + i] = char(n >> (24 - 8 * i));
         expectInputError(bgeo, ParticleFormat::Bgeo, "bgeo points " + std::to_string(n));
     }
 }
@@ -201,7 +223,8 @@ TEST(BadInputHeaders, ExtensionAndContentDisagree)
 {
     const std::string ply = validFile(ParticleFormat::Ply, smallSet());
     const std::string msg = readError(ply, ParticleFormat::Bgeo);
-    EXPECT_NE(msg.find("the name says Houdini BGEO but the content is PLY"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("the name says Houdini BGEO but the content is PLY"), std::string::npos)
+        << msg;
 }
 
 TEST(BadInputHeaders, MissingFileAndFolder)

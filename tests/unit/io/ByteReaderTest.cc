@@ -25,7 +25,9 @@ TEST(ByteReader, CheckedCountRejectsHeadersLargerThanTheData)
         in.checkedCount(uint64_t(1) << 40, 12, "points");
         FAIL() << "no exception";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("buf: header promises 1099511627776 points"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("buf: header promises 1099511627776 points"),
+                  std::string::npos)
+            << e.what();
     }
 }
 

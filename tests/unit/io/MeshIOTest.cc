@@ -32,7 +32,11 @@ TEST(MeshIO, ObjHasVerticesNormalsAndOneBasedFaces)
         std::istringstream ls(line);
         std::string key;
         ls >> key;
-        if (key == "v") { Vec3f p; ls >> p.x >> p.y >> p.z; v.push_back(p); }
+        if (key == "v") {
+            Vec3f p;
+            ls >> p.x >> p.y >> p.z;
+            v.push_back(p);
+        }
         if (key == "vn") ++vn;
         if (key == "f") faces.push_back(line);
     }

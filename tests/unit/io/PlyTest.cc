@@ -8,10 +8,11 @@ using io::ParticleFormat;
 
 TEST(Ply, AsciiWithExtraProperties)
 {
-    const std::string f = "ply\nformat ascii 1.0\ncomment hello\nelement vertex 2\nproperty float x\n"
-                          "property float y\nproperty float z\nproperty int id\nproperty float v_0\n"
-                          "property float v_1\nproperty float v_2\nend_header\n"
-                          "1 2 3 7 0.5 0.25 0\n-1 -2 -3.5 8 1 1 1\n";
+    const std::string f =
+        "ply\nformat ascii 1.0\ncomment hello\nelement vertex 2\nproperty float x\n"
+        "property float y\nproperty float z\nproperty int id\nproperty float v_0\n"
+        "property float v_1\nproperty float v_2\nend_header\n"
+        "1 2 3 7 0.5 0.25 0\n-1 -2 -3.5 8 1 1 1\n";
     const ParticleSet ps = readBytes(f, ParticleFormat::Ply);
     ASSERT_EQ(ps.size(), 2u);
     EXPECT_EQ(ps.positions[1], Vec3f(-1.f, -2.f, -3.5f));
@@ -23,7 +24,8 @@ TEST(Ply, AsciiWithExtraProperties)
 TEST(Ply, BinaryBigEndianDoublesAfterAListElement)
 {
     ByteBuilder b;
-    b.text("ply\r\nformat binary_big_endian 1.0\r\nelement face 2\r\nproperty list uchar int vertex_indices\r\n"
+    b.text("ply\r\nformat binary_big_endian 1.0\r\nelement face 2\r\nproperty list uchar int "
+           "vertex_indices\r\n"
            "element vertex 2\r\nproperty double x\r\nproperty double y\r\nproperty double z\r\n"
            "property uchar red\r\nend_header\n");
     b.be(uint8_t(3)).be(int32_t(0)).be(int32_t(1)).be(int32_t(0));
@@ -39,6 +41,7 @@ TEST(Ply, BinaryBigEndianDoublesAfterAListElement)
 
 TEST(Ply, MissingCoordinatesNamed)
 {
-    const std::string f = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 2\n";
+    const std::string f = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty "
+                          "float y\nend_header\n1 2\n";
     EXPECT_NE(readError(f, ParticleFormat::Ply).find("lacks x, y, z"), std::string::npos);
 }

@@ -22,10 +22,11 @@ ParticleSet awkwardParticles(size_t n)
     std::vector<float> density, vel;
     std::vector<int64_t> id;
     for (size_t i = 0; i < n; ++i) {
-        const float scale = std::pow(10.f, float(int(i % 7) - 3));  // 1e-3 .. 1e3
+        const float scale = std::pow(10.f, float(int(i % 7) - 3)); // 1e-3 .. 1e3
         ps.positions.emplace_back(u(rng) * scale, u(rng) * 3.f + 0.1f, u(rng) * 1000.f);
         density.push_back(1000.f + u(rng));
-        for (int c = 0; c < 3; ++c) vel.push_back(u(rng) * 5.f);
+        for (int c = 0; c < 3; ++c)
+            vel.push_back(u(rng) * 5.f);
         id.push_back(i % 3 == 0 ? -int64_t(i) : int64_t(2147483647 - i));
     }
     ps.addFloat("density", 1, density);
@@ -44,19 +45,22 @@ uint32_t bits(float f)
 /// One particle as a comparable row of bit patterns.
 std::vector<int64_t> row(const ParticleSet& ps, size_t i, bool withAttributes)
 {
-    std::vector<int64_t> r = {bits(ps.positions[i].x), bits(ps.positions[i].y), bits(ps.positions[i].z)};
+    std::vector<int64_t> r = {bits(ps.positions[i].x), bits(ps.positions[i].y),
+                              bits(ps.positions[i].z)};
     if (!withAttributes) return r;
     for (const char* name : {"density", "v", "id"}) {
         const Attribute* a = ps.find(name);
         if (!a) return {};
         for (int c = 0; c < a->components; ++c)
-            r.push_back(a->type == AttributeType::Float ? int64_t(bits(a->floats[i * a->components + c]))
-                                                        : a->ints[i * a->components + c]);
+            r.push_back(a->type == AttributeType::Float
+                            ? int64_t(bits(a->floats[i * a->components + c]))
+                            : a->ints[i * a->components + c]);
     }
     return r;
 }
 
-void expectSameParticles(const ParticleSet& a, const ParticleSet& b, bool withAttributes, bool ordered)
+void expectSameParticles(const ParticleSet& a, const ParticleSet& b, bool withAttributes,
+                         bool ordered)
 {
     ASSERT_EQ(a.size(), b.size());
     std::vector<std::vector<int64_t>> ra, rb;
@@ -69,7 +73,8 @@ void expectSameParticles(const ParticleSet& a, const ParticleSet& b, bool withAt
         std::sort(ra.begin(), ra.end());
         std::sort(rb.begin(), rb.end());
     }
-    for (size_t i = 0; i < ra.size(); ++i) ASSERT_EQ(ra[i], rb[i]) << "particle " << i;
+    for (size_t i = 0; i < ra.size(); ++i)
+        ASSERT_EQ(ra[i], rb[i]) << "particle " << i;
 }
 
 struct Case
@@ -78,7 +83,9 @@ struct Case
     bool attributes, ordered;
 };
 
-class RoundTrip : public ::testing::TestWithParam<Case> {};
+class RoundTrip : public ::testing::TestWithParam<Case>
+{
+};
 
 } // namespace
 
@@ -139,7 +146,9 @@ TEST(RoundTrip, FailedWriteKeepsTheExistingFileAndLeavesNoTemporary)
     EXPECT_THROW(io::writeParticles(ps, dir.path("no/such/folder/x.ply")), OutputError);
     const std::string listing = dir.path();
     int entries = 0;
-    for (const char* probe : {"keep.bgeo"}) entries += fileExists(dir.path(probe));
+    for (const char* probe : {"keep.bgeo"})
+        entries += fileExists(dir.path(probe));
     EXPECT_EQ(entries, 1);
-    EXPECT_EQ(std::system(("test $(ls -A '" + listing + "' | wc -l) -eq 1").c_str()), 0) << "temporary file left behind";
+    EXPECT_EQ(std::system(("test $(ls -A '" + listing + "' | wc -l) -eq 1").c_str()), 0)
+        << "temporary file left behind";
 }

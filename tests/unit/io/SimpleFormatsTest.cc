@@ -8,11 +8,13 @@ using io::ParticleFormat;
 TEST(Xyz, RawFloat32Triples)
 {
     ByteBuilder b;
-    for (float v : {1.f, 2.f, 3.f, -0.5f, 1e-20f, 4e20f}) b.le(v);
+    for (float v : {1.f, 2.f, 3.f, -0.5f, 1e-20f, 4e20f})
+        b.le(v);
     const ParticleSet ps = readBytes(b.s, ParticleFormat::Xyz);
     ASSERT_EQ(ps.size(), 2u);
     EXPECT_EQ(ps.positions[1], Vec3f(-0.5f, 1e-20f, 4e20f));
-    EXPECT_NE(readError(b.s.substr(0, 13), ParticleFormat::Xyz).find("not a multiple of 12"), std::string::npos);
+    EXPECT_NE(readError(b.s.substr(0, 13), ParticleFormat::Xyz).find("not a multiple of 12"),
+              std::string::npos);
 }
 
 TEST(Xyz, TextXyzIsRecognised)
@@ -24,8 +26,9 @@ TEST(Xyz, TextXyzIsRecognised)
 
 TEST(Csv, HeaderWithVectorColumnsAndComments)
 {
-    const std::string f = "# exported\nid,Points:0,Points:1,Points:2,velocity:0,velocity:1,velocity:2\n"
-                          "0,1.5,2,3,0,0,-1\n1,-1,-2,-3,1,1,1\n\n";
+    const std::string f =
+        "# exported\nid,Points:0,Points:1,Points:2,velocity:0,velocity:1,velocity:2\n"
+        "0,1.5,2,3,0,0,-1\n1,-1,-2,-3,1,1,1\n\n";
     const ParticleSet ps = readBytes(f, ParticleFormat::Csv);
     ASSERT_EQ(ps.size(), 2u);
     EXPECT_EQ(ps.positions[0], Vec3f(1.5f, 2.f, 3.f));
@@ -36,7 +39,8 @@ TEST(Csv, HeaderWithVectorColumnsAndComments)
 
 TEST(Csv, NoHeaderWhitespaceAndSemicolon)
 {
-    EXPECT_EQ(readBytes("1\t2\t3\n4\t5\t6\n", ParticleFormat::Csv).positions[1], Vec3f(4.f, 5.f, 6.f));
+    EXPECT_EQ(readBytes("1\t2\t3\n4\t5\t6\n", ParticleFormat::Csv).positions[1],
+              Vec3f(4.f, 5.f, 6.f));
     const ParticleSet ps = readBytes("x;y;z;rho\n1;2;3;1000\n", ParticleFormat::Csv);
     EXPECT_EQ(ps.positions[0], Vec3f(1.f, 2.f, 3.f));
     EXPECT_EQ(ps.find(AttributeRole::Density)->floats[0], 1000.f);
@@ -44,23 +48,31 @@ TEST(Csv, NoHeaderWhitespaceAndSemicolon)
 
 TEST(Csv, RaggedRowsAndBadNumbersNamed)
 {
-    EXPECT_NE(readError("1,2,3\n4,5\n", ParticleFormat::Csv).find("line 2 has 2 columns"), std::string::npos);
-    EXPECT_NE(readError("1,2,3\n4,5,abc\n", ParticleFormat::Csv).find("'abc' is not a number"), std::string::npos);
-    EXPECT_NE(readError("a,b,c\n1,2,3\n", ParticleFormat::Csv).find("no x, y, z"), std::string::npos);
+    EXPECT_NE(readError("1,2,3\n4,5\n", ParticleFormat::Csv).find("line 2 has 2 columns"),
+              std::string::npos);
+    EXPECT_NE(readError("1,2,3\n4,5,abc\n", ParticleFormat::Csv).find("'abc' is not a number"),
+              std::string::npos);
+    EXPECT_NE(readError("a,b,c\n1,2,3\n", ParticleFormat::Csv).find("no x, y, z"),
+              std::string::npos);
 }
 
 namespace {
-std::string npy(const std::string& descr, bool fortran, const std::string& shape, const std::string& data, int version = 1)
+std::string npy(const std::string& descr, bool fortran, const std::string& shape,
+                const std::string& data, int version = 1)
 {
-    std::string dict = "{'descr': '" + descr + "', 'fortran_order': " + (fortran ? "True" : "False") +
+    std::string dict = "{'descr': '" + descr +
+                       "', 'fortran_order': " + (fortran ? "True" : "False") +
                        ", 'shape': " + shape + ", }";
     const size_t pre = version == 1 ? 10 : 12;
-    while ((pre + dict.size() + 1) % 64) dict += ' ';
+    while ((pre + dict.size() + 1) % 64)
+        dict += ' ';
     dict += '\n';
     ByteBuilder b;
     b.text("\x93NUMPY").le(uint8_t(version)).le(uint8_t(0));
-    if (version == 1) b.le(uint16_t(dict.size()));
-    else b.le(uint32_t(dict.size()));
+    if (version == 1)
+        b.le(uint16_t(dict.size()));
+    else
+        b.le(uint32_t(dict.size()));
     return b.s + dict + data;
 }
 } // namespace
@@ -68,28 +80,35 @@ std::string npy(const std::string& descr, bool fortran, const std::string& shape
 TEST(Npy, Float32CAndFloat64FortranAndBigEndian)
 {
     ByteBuilder f4;
-    for (float v : {1.f, 2.f, 3.f, 4.f, 5.f, 6.f}) f4.le(v);
+    for (float v : {1.f, 2.f, 3.f, 4.f, 5.f, 6.f})
+        f4.le(v);
     ParticleSet ps = readBytes(npy("<f4", false, "(2, 3)", f4.s), ParticleFormat::Npy);
     ASSERT_EQ(ps.size(), 2u);
     EXPECT_EQ(ps.positions[1], Vec3f(4.f, 5.f, 6.f));
 
-    ByteBuilder f8;  // Fortran order: all x, then all y, then all z
-    for (double v : {1.0, 4.0, 2.0, 5.0, 3.0, 6.0}) f8.le(v);
+    ByteBuilder f8; // Fortran order: all x, then all y, then all z
+    for (double v : {1.0, 4.0, 2.0, 5.0, 3.0, 6.0})
+        f8.le(v);
     ps = readBytes(npy("<f8", true, "(2, 3)", f8.s, 2), ParticleFormat::Npy);
     EXPECT_EQ(ps.positions[0], Vec3f(1.f, 2.f, 3.f));
     EXPECT_EQ(ps.positions[1], Vec3f(4.f, 5.f, 6.f));
 
     ByteBuilder be;
-    for (float v : {7.f, 8.f, 9.f}) be.be(v);
-    EXPECT_EQ(readBytes(npy(">f4", false, "(1, 3)", be.s), ParticleFormat::Npy).positions[0], Vec3f(7.f, 8.f, 9.f));
+    for (float v : {7.f, 8.f, 9.f})
+        be.be(v);
+    EXPECT_EQ(readBytes(npy(">f4", false, "(1, 3)", be.s), ParticleFormat::Npy).positions[0],
+              Vec3f(7.f, 8.f, 9.f));
 }
 
 TEST(Npy, WrongShapeOrTypeNamed)
 {
-    EXPECT_NE(readError(npy("<f4", false, "(2, 4)", std::string(32, '\0')), ParticleFormat::Npy).find("not (N, 3)"),
+    EXPECT_NE(readError(npy("<f4", false, "(2, 4)", std::string(32, '\0')), ParticleFormat::Npy)
+                  .find("not (N, 3)"),
               std::string::npos);
-    EXPECT_NE(readError(npy("<i4", false, "(1, 3)", std::string(12, '\0')), ParticleFormat::Npy).find("unsupported dtype"),
+    EXPECT_NE(readError(npy("<i4", false, "(1, 3)", std::string(12, '\0')), ParticleFormat::Npy)
+                  .find("unsupported dtype"),
               std::string::npos);
-    EXPECT_NE(readError(npy("<f4", false, "(5, 3)", std::string(12, '\0')), ParticleFormat::Npy).find("promises 5"),
+    EXPECT_NE(readError(npy("<f4", false, "(5, 3)", std::string(12, '\0')), ParticleFormat::Npy)
+                  .find("promises 5"),
               std::string::npos);
 }

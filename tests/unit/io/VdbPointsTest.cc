@@ -12,7 +12,8 @@ TEST(VdbPoints, WrittenGridIsAPointDataGridWithAttributes)
 {
     TempDir dir;
     ParticleSet ps;
-    for (int i = 0; i < 1000; ++i) ps.positions.emplace_back(0.01f * i, 0.02f * (i % 10), -0.5f);
+    for (int i = 0; i < 1000; ++i)
+        ps.positions.emplace_back(0.01f * i, 0.02f * (i % 10), -0.5f);
     std::vector<float> rho(1000, 1000.f);
     ps.addFloat("density", 1, rho);
     ps.addFloat("v", 3, std::vector<float>(3000, 0.5f));
@@ -53,10 +54,12 @@ TEST(VdbPoints, TruncatedFileIsCaughtBeforeOpenVdbReadsIt)
     // OpenVDB itself allocated gigabytes on such files; the structural pre-check names the cut.
     TempDir dir;
     ParticleSet ps;
-    for (int i = 0; i < 500; ++i) ps.positions.emplace_back(0.1f * i, 0.f, 0.f);
+    for (int i = 0; i < 500; ++i)
+        ps.positions.emplace_back(0.1f * i, 0.f, 0.f);
     io::writeParticles(ps, dir.path("p.vdb"));
     const std::string bytes = readFileBytes(dir.path("p.vdb"));
-    const std::string msg = readError(bytes.substr(0, bytes.size() / 2), io::ParticleFormat::VdbPoints);
+    const std::string msg =
+        readError(bytes.substr(0, bytes.size() / 2), io::ParticleFormat::VdbPoints);
     EXPECT_NE(msg.find("bytes (truncated file?)"), std::string::npos) << msg;
 }
 
@@ -64,11 +67,15 @@ namespace {
 std::string writtenVdb(TempDir& dir)
 {
     ParticleSet ps;
-    for (int i = 0; i < 500; ++i) ps.positions.emplace_back(0.1f * i, 0.f, 0.f);
+    for (int i = 0; i < 500; ++i)
+        ps.positions.emplace_back(0.1f * i, 0.f, 0.f);
     io::writeParticles(ps, dir.path("p.vdb"));
     return readFileBytes(dir.path("p.vdb"));
 }
-void putLE32(std::string& s, size_t at, uint32_t v) { std::memcpy(&s[at], &v, 4); }
+void putLE32(std::string& s, size_t at, uint32_t v)
+{
+    std::memcpy(&s[at], &v, 4);
+}
 } // namespace
 
 TEST(VdbPoints, CorruptGridMetadataLengthIsCaughtBeforeOpenVdb)
@@ -90,11 +97,11 @@ TEST(VdbPoints, CorruptRootTileCountIsCaughtBeforeOpenVdb)
     std::string bytes = writtenVdb(dir);
     const size_t map = bytes.find("UniformScaleMap");
     ASSERT_NE(map, std::string::npos);
-    const size_t tree = map + 15 + 120;  // map name, then the map's 5 Vec3d
+    const size_t tree = map + 15 + 120; // map name, then the map's 5 Vec3d
     uint32_t buffers;
     std::memcpy(&buffers, &bytes[tree], 4);
     ASSERT_EQ(buffers, 1u) << "layout assumption: tree buffer count follows the transform";
-    putLE32(bytes, tree + 8, 0xfffffff0u);  // after buffer count and background
+    putLE32(bytes, tree + 8, 0xfffffff0u); // after buffer count and background
     const std::string msg = readError(bytes, io::ParticleFormat::VdbPoints);
     EXPECT_NE(msg.find("corrupt root node"), std::string::npos) << msg;
 }

@@ -34,15 +34,21 @@ TEST(VtkLegacy, AsciiPolydataWithScalarsVectorsAndField)
 TEST(VtkLegacy, BinaryUnstructuredGridDoublePointsCellsAndCellData)
 {
     ByteBuilder b;
-    b.text("# vtk DataFile Version 4.1\nSPlisHSPlasH particle data\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 2 double\n");
-    for (double v : {0.25, -1.0, 3.0, 1e10, 2.0, -0.0}) b.be(v);
+    b.text("# vtk DataFile Version 4.1\nSPlisHSPlasH particle data\nBINARY\nDATASET "
+           "UNSTRUCTURED_GRID\nPOINTS 2 double\n");
+    for (double v : {0.25, -1.0, 3.0, 1e10, 2.0, -0.0})
+        b.be(v);
     b.text("\nCELLS 2 4\n");
-    for (int32_t v : {1, 0, 1, 1}) b.be(v);
+    for (int32_t v : {1, 0, 1, 1})
+        b.be(v);
     b.text("\nCELL_TYPES 2\n").be(int32_t(1)).be(int32_t(1));
     b.text("\nCELL_DATA 2\nSCALARS cellval float 1\nLOOKUP_TABLE default\n").be(1.f).be(2.f);
-    b.text("\nPOINT_DATA 2\nSCALARS id unsigned_int 1\nLOOKUP_TABLE id_table\n").be(uint32_t(4000000000u)).be(uint32_t(5));
+    b.text("\nPOINT_DATA 2\nSCALARS id unsigned_int 1\nLOOKUP_TABLE id_table\n")
+        .be(uint32_t(4000000000u))
+        .be(uint32_t(5));
     b.text("\nFIELD FieldData 1\nvelocity 3 2 float\n");
-    for (float v : {1.f, 2.f, 3.f, 4.f, 5.f, 6.f}) b.be(v);
+    for (float v : {1.f, 2.f, 3.f, 4.f, 5.f, 6.f})
+        b.be(v);
     b.text("\n");
     const ParticleSet ps = readBytes(b.s, ParticleFormat::VtkLegacy);
     ASSERT_EQ(ps.size(), 2u);
@@ -57,9 +63,11 @@ TEST(VtkLegacy, Version5OffsetsConnectivityAndMetadata)
 {
     ByteBuilder b;
     b.text("# vtk DataFile Version 5.1\nvtk output\nBINARY\nDATASET POLYDATA\nPOINTS 2 float\n");
-    for (float v : {1.f, 2.f, 3.f, 4.f, 5.f, 6.f}) b.be(v);
+    for (float v : {1.f, 2.f, 3.f, 4.f, 5.f, 6.f})
+        b.be(v);
     b.text("\nMETADATA\nINFORMATION 0\n\nVERTICES 3 2\nOFFSETS vtktypeint64\n");
-    for (int64_t v : {0, 1, 2}) b.be(v);
+    for (int64_t v : {0, 1, 2})
+        b.be(v);
     b.text("\nCONNECTIVITY vtktypeint64\n").be(int64_t(0)).be(int64_t(1));
     b.text("\nPOINT_DATA 2\nSCALARS rho double 1\nLOOKUP_TABLE default\n").be(1.5).be(2.5);
     b.text("\n");
@@ -71,17 +79,22 @@ TEST(VtkLegacy, Version5OffsetsConnectivityAndMetadata)
 
 TEST(VtkLegacy, RejectsNonPointDatasetsAndMismatchedPointData)
 {
-    EXPECT_NE(readError("# vtk DataFile Version 3.0\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n",
-                        ParticleFormat::VtkLegacy)
-                  .find("not a point set"),
-              std::string::npos);
-    EXPECT_NE(readError("# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 1 float\n0 0 0\n"
-                        "POINT_DATA 2\nSCALARS a float\n1 2\n",
-                        ParticleFormat::VtkLegacy)
-                  .find("does not match POINTS"),
-              std::string::npos);
-    EXPECT_NE(readError("# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 2 float\n0 0 0 1 x 2\n",
-                        ParticleFormat::VtkLegacy)
-                  .find("is not a number"),
-              std::string::npos);
+    EXPECT_NE(
+        readError(
+            "# vtk DataFile Version 3.0\nx\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n",
+            ParticleFormat::VtkLegacy)
+            .find("not a point set"),
+        std::string::npos);
+    EXPECT_NE(
+        readError("# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 1 float\n0 0 0\n"
+                  "POINT_DATA 2\nSCALARS a float\n1 2\n",
+                  ParticleFormat::VtkLegacy)
+            .find("does not match POINTS"),
+        std::string::npos);
+    EXPECT_NE(
+        readError(
+            "# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 2 float\n0 0 0 1 x 2\n",
+            ParticleFormat::VtkLegacy)
+            .find("is not a number"),
+        std::string::npos);
 }

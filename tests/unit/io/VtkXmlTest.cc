@@ -11,12 +11,15 @@ const std::vector<double> kPoints = {0.5, 1.0, -2.0, 3.25, 4.0, 5.0, -6.0, 7.125
 const std::vector<float> kDensity = {998.f, 1000.f, 1002.5f};
 const std::vector<int64_t> kIds = {10, 11, 1ll << 40};
 
-std::string rawBytes(const void* p, size_t n) { return std::string(static_cast<const char*>(p), n); }
+std::string rawBytes(const void* p, size_t n)
+{
+    return std::string(static_cast<const char*>(p), n);
+}
 
 struct Encoding
 {
-    std::string format;      // ascii | binary | appended
-    std::string appended;    // raw | base64
+    std::string format;   // ascii | binary | appended
+    std::string appended; // raw | base64
     bool zlib = false;
     bool header64 = false;
 };
@@ -31,13 +34,16 @@ std::string payload(const std::string& data, const Encoding& e, size_t blockSize
         return h.s + data;
     }
     std::vector<std::string> blocks;
-    for (size_t i = 0; i < data.size(); i += blockSize) blocks.push_back(zlibBytes(data.substr(i, blockSize)));
+    for (size_t i = 0; i < data.size(); i += blockSize)
+        blocks.push_back(zlibBytes(data.substr(i, blockSize)));
     put(blocks.size());
     put(blockSize);
     put(data.size() % blockSize);
-    for (auto& b : blocks) put(b.size());
+    for (auto& b : blocks)
+        put(b.size());
     std::string out = h.s;
-    for (auto& b : blocks) out += b;
+    for (auto& b : blocks)
+        out += b;
     return out;
 }
 
@@ -46,8 +52,8 @@ std::string makeVtu(const Encoding& e, const std::string& type = "UnstructuredGr
     const std::string pts = rawBytes(kPoints.data(), kPoints.size() * 8);
     const std::string rho = rawBytes(kDensity.data(), kDensity.size() * 4);
     const std::string ids = rawBytes(kIds.data(), kIds.size() * 8);
-    std::string head = "<?xml version=\"1.0\"?>\n<!-- written by a test -->\n<VTKFile type=\"" + type +
-                       "\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"" +
+    std::string head = "<?xml version=\"1.0\"?>\n<!-- written by a test -->\n<VTKFile type=\"" +
+                       type + "\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"" +
                        (e.header64 ? "UInt64" : "UInt32") + "\"" +
                        (e.zlib ? " compressor=\"vtkZLibDataCompressor\"" : "") + ">\n<" + type +
                        ">\n<Piece NumberOfPoints=\"3\" NumberOfCells=\"0\">\n";
@@ -59,7 +65,8 @@ std::string makeVtu(const Encoding& e, const std::string& type = "UnstructuredGr
         // VTK base64-encodes the block table separately from the compressed blocks.
         const size_t hs = e.header64 ? 8 : 4;
         const size_t table = e.zlib ? hs * (3 + (bin.size() + 15) / 16) : p.size();
-        const std::string b64 = base64(p.substr(0, table)) + (table < p.size() ? base64(p.substr(table)) : "");
+        const std::string b64 =
+            base64(p.substr(0, table)) + (table < p.size() ? base64(p.substr(table)) : "");
         if (e.format == "binary") return tag + ">\n" + b64 + "\n</DataArray>\n";
         const std::string enc = e.appended == "base64" ? b64 : p;
         tag += " offset=\"" + std::to_string(appendedData.size()) + "\"/>\n";
@@ -68,11 +75,15 @@ std::string makeVtu(const Encoding& e, const std::string& type = "UnstructuredGr
     };
     std::string body = "<PointData>\n";
     body += array("type=\"Float32\" Name=\"density\"", rho, "998 1000 1002.5");
-    body += array("type=\"Int64\" Name=\"id\" NumberOfComponents=\"1\"", ids, "10 11 1099511627776");
+    body +=
+        array("type=\"Int64\" Name=\"id\" NumberOfComponents=\"1\"", ids, "10 11 1099511627776");
     body += "</PointData>\n<Points>\n";
-    body += array("type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"", pts, "0.5 1 -2 3.25 4 5\n-6 7.125 8");
+    body += array("type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\"", pts,
+                  "0.5 1 -2 3.25 4 5\n-6 7.125 8");
     body += "</Points>\n</Piece>\n</" + type + ">\n";
-    if (e.format == "appended") body += "<AppendedData encoding=\"" + e.appended + "\">\n_" + appendedData + "\n</AppendedData>\n";
+    if (e.format == "appended")
+        body += "<AppendedData encoding=\"" + e.appended + "\">\n_" + appendedData +
+                "\n</AppendedData>\n";
     return head + body + "</VTKFile>\n";
 }
 
@@ -80,7 +91,8 @@ void expectContent(const ParticleSet& ps)
 {
     ASSERT_EQ(ps.size(), 3u);
     for (size_t i = 0; i < 3; ++i)
-        for (int c = 0; c < 3; ++c) EXPECT_EQ(ps.positions[i][c], float(kPoints[i * 3 + c]));
+        for (int c = 0; c < 3; ++c)
+            EXPECT_EQ(ps.positions[i][c], float(kPoints[i * 3 + c]));
     ASSERT_NE(ps.find("density"), nullptr);
     EXPECT_EQ(ps.find("density")->floats, kDensity);
     ASSERT_NE(ps.find("id"), nullptr);
@@ -89,20 +101,46 @@ void expectContent(const ParticleSet& ps)
 
 } // namespace
 
-TEST(VtkXml, Ascii) { expectContent(readBytes(makeVtu({"ascii", "", false, false}), ParticleFormat::VtkXml)); }
-TEST(VtkXml, InlineBase64) { expectContent(readBytes(makeVtu({"binary", "", false, false}), ParticleFormat::VtkXml)); }
-TEST(VtkXml, InlineBase64Zlib) { expectContent(readBytes(makeVtu({"binary", "", true, true}), ParticleFormat::VtkXml)); }
-TEST(VtkXml, AppendedRaw) { expectContent(readBytes(makeVtu({"appended", "raw", false, true}), ParticleFormat::VtkXml)); }
-TEST(VtkXml, AppendedRawZlib) { expectContent(readBytes(makeVtu({"appended", "raw", true, false}), ParticleFormat::VtkXml)); }
-TEST(VtkXml, AppendedBase64) { expectContent(readBytes(makeVtu({"appended", "base64", false, false}), ParticleFormat::VtkXml)); }
-TEST(VtkXml, AppendedBase64Zlib) { expectContent(readBytes(makeVtu({"appended", "base64", true, true}), ParticleFormat::VtkXml)); }
-TEST(VtkXml, PolyDataVtp) { expectContent(readBytes(makeVtu({"appended", "raw", true, false}, "PolyData"), ParticleFormat::VtkXml)); }
+TEST(VtkXml, Ascii)
+{
+    expectContent(readBytes(makeVtu({"ascii", "", false, false}), ParticleFormat::VtkXml));
+}
+TEST(VtkXml, InlineBase64)
+{
+    expectContent(readBytes(makeVtu({"binary", "", false, false}), ParticleFormat::VtkXml));
+}
+TEST(VtkXml, InlineBase64Zlib)
+{
+    expectContent(readBytes(makeVtu({"binary", "", true, true}), ParticleFormat::VtkXml));
+}
+TEST(VtkXml, AppendedRaw)
+{
+    expectContent(readBytes(makeVtu({"appended", "raw", false, true}), ParticleFormat::VtkXml));
+}
+TEST(VtkXml, AppendedRawZlib)
+{
+    expectContent(readBytes(makeVtu({"appended", "raw", true, false}), ParticleFormat::VtkXml));
+}
+TEST(VtkXml, AppendedBase64)
+{
+    expectContent(readBytes(makeVtu({"appended", "base64", false, false}), ParticleFormat::VtkXml));
+}
+TEST(VtkXml, AppendedBase64Zlib)
+{
+    expectContent(readBytes(makeVtu({"appended", "base64", true, true}), ParticleFormat::VtkXml));
+}
+TEST(VtkXml, PolyDataVtp)
+{
+    expectContent(
+        readBytes(makeVtu({"appended", "raw", true, false}, "PolyData"), ParticleFormat::VtkXml));
+}
 
 TEST(VtkXml, CorruptZlibBlockIsAnError)
 {
     std::string f = makeVtu({"appended", "raw", true, false});
     const size_t at = f.find("_") + 40;
-    for (size_t i = at; i < at + 8; ++i) f[i] = char(~f[i]);
+    for (size_t i = at; i < at + 8; ++i)
+        f[i] = char(~f[i]);
     EXPECT_FALSE(readError(f, ParticleFormat::VtkXml).empty());
 }
 

@@ -32,7 +32,8 @@ TEST(LevelSet, FileIsAnOpenVdbLevelSetWithMetadata)
     EXPECT_EQ(grid->indexToWorld(openvdb::Coord(4, -2, 8)), openvdb::Vec3d(4, -2, 8) * p.voxelSize);
     EXPECT_FLOAT_EQ(grid->background(), float(3 * p.voxelSize));
     EXPECT_EQ(grid->activeVoxelCount(), res.grid->activeVoxelCount());
-    for (const std::string& name : levelSetMetadataNames()) EXPECT_TRUE((*grid)[name]) << name;
+    for (const std::string& name : levelSetMetadataNames())
+        EXPECT_TRUE((*grid)[name]) << name;
     EXPECT_EQ(grid->metaValue<double>("fluidsurf:particle_radius"), sp.radius);
     EXPECT_EQ(grid->metaValue<double>("fluidsurf:influence_radius"), 4 * sp.radius);
     EXPECT_EQ(grid->metaValue<std::string>("fluidsurf:field"), "ssp07");
@@ -49,14 +50,16 @@ TEST(LevelSet, FileIsAnOpenVdbLevelSetWithMetadata)
     EXPECT_FALSE(acc.isValueOn(inside));
     EXPECT_FLOAT_EQ(acc.getValue(inside), -grid->background());
     EXPECT_FLOAT_EQ(acc.getValue(openvdb::Coord{3 * mid, mid, mid}), grid->background());
-    for (auto it = grid->cbeginValueOn(); it; ++it) ASSERT_LE(std::abs(*it), grid->background());
+    for (auto it = grid->cbeginValueOn(); it; ++it)
+        ASSERT_LE(std::abs(*it), grid->background());
 }
 
 TEST(LevelSet, WriteFailureLeavesNothing)
 {
     SceneParams sp;
     sp.count = 1000;
-    const RasterizeResult res = rasterizeParticles(generateScene(Scene::Block, sp), Params::fromRadius(sp.radius));
+    const RasterizeResult res =
+        rasterizeParticles(generateScene(Scene::Block, sp), Params::fromRadius(sp.radius));
     EXPECT_THROW(writeLevelSet({res.grid}, "/nonexistent-folder/x.vdb"), OutputError);
 }
 
@@ -72,11 +75,11 @@ TEST(LevelSet, InvalidParametersAreRejected)
     p.voxelSize = 0;
     EXPECT_THROW(rasterizeParticles(ps, p), ValueError);
     p = Params::fromRadius(sp.radius);
-    p.voxelSize = sp.radius / 32, p.influenceRadius = 1001 * p.voxelSize;  // a huge kernel
+    p.voxelSize = sp.radius / 32, p.influenceRadius = 1001 * p.voxelSize; // a huge kernel
     EXPECT_THROW(rasterizeParticles(ps, p), ValueError);
     ParticleSet far;
     far.positions = ps.positions;
-    far.positions.push_back(Vec3f(1e12f, 0, 0));  // 2^21 cells cannot span it
+    far.positions.push_back(Vec3f(1e12f, 0, 0)); // 2^21 cells cannot span it
     try {
         rasterizeParticles(far, Params::fromRadius(sp.radius));
         ADD_FAILURE() << "no error";

@@ -16,13 +16,22 @@ namespace test {
 
 using P3 = std::array<double, 3>;
 
-inline P3 sub(const P3& a, const P3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-inline double dot(const P3& a, const P3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+inline P3 sub(const P3& a, const P3& b)
+{
+    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+inline double dot(const P3& a, const P3& b)
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
 inline P3 cross(const P3& a, const P3& b)
 {
     return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
-inline P3 toP3(const Vec3f& v) { return {v.x, v.y, v.z}; }
+inline P3 toP3(const Vec3f& v)
+{
+    return {v.x, v.y, v.z};
+}
 
 inline double segmentDistance(const P3& p, const P3& a, const P3& b)
 {
@@ -42,7 +51,8 @@ inline double triangleDistance(const P3& p, const P3& a, const P3& b, const P3& 
     if (n2 > 0) {
         const double h = dot(sub(p, a), n) / n2;
         const P3 q = {p[0] - h * n[0], p[1] - h * n[1], p[2] - h * n[2]};
-        const bool in = dot(cross(sub(b, a), sub(q, a)), n) >= 0 && dot(cross(sub(c, b), sub(q, b)), n) >= 0 &&
+        const bool in = dot(cross(sub(b, a), sub(q, a)), n) >= 0 &&
+                        dot(cross(sub(c, b), sub(q, b)), n) >= 0 &&
                         dot(cross(sub(a, c), sub(q, c)), n) >= 0;
         if (in) return std::abs(h) * std::sqrt(n2);
     }
@@ -64,7 +74,8 @@ public:
                 }
             for (int64_t x = cell(lo[0]); x <= cell(hi[0]); ++x)
                 for (int64_t y = cell(lo[1]); y <= cell(hi[1]); ++y)
-                    for (int64_t z = cell(lo[2]); z <= cell(hi[2]); ++z) mBuckets[key(x, y, z)].push_back(t);
+                    for (int64_t z = cell(lo[2]); z <= cell(hi[2]); ++z)
+                        mBuckets[key(x, y, z)].push_back(t);
         }
     }
 
@@ -78,7 +89,8 @@ public:
                     if (it == mBuckets.end()) continue;
                     for (uint32_t t : it->second) {
                         const auto& tri = mMesh.triangles[t];
-                        best = std::min(best, triangleDistance(p, toP3(mMesh.points[tri[0]]), toP3(mMesh.points[tri[1]]),
+                        best = std::min(best, triangleDistance(p, toP3(mMesh.points[tri[0]]),
+                                                               toP3(mMesh.points[tri[1]]),
                                                                toP3(mMesh.points[tri[2]])));
                     }
                 }
@@ -89,7 +101,8 @@ private:
     int64_t cell(double v) const { return int64_t(std::floor(v / mCell)); }
     static uint64_t key(int64_t x, int64_t y, int64_t z)
     {
-        return (uint64_t(x & 0x1fffff) << 42) | (uint64_t(y & 0x1fffff) << 21) | uint64_t(z & 0x1fffff);
+        return (uint64_t(x & 0x1fffff) << 42) | (uint64_t(y & 0x1fffff) << 21) |
+               uint64_t(z & 0x1fffff);
     }
     const TriangleMesh& mMesh;
     double mCell;
@@ -101,11 +114,13 @@ inline double oneSidedDistance(const TriangleMesh& a, const TriangleMesh& b, dou
 {
     const MeshDistance dist(b, reach);
     double worst = 0;
-    for (const Vec3f& v : a.points) worst = std::max(worst, dist(toP3(v)));
+    for (const Vec3f& v : a.points)
+        worst = std::max(worst, dist(toP3(v)));
     for (const auto& t : a.triangles) {
         P3 c{0, 0, 0};
         for (uint32_t v : t)
-            for (int k = 0; k < 3; ++k) c[k] += toP3(a.points[v])[k] / 3;
+            for (int k = 0; k < 3; ++k)
+                c[k] += toP3(a.points[v])[k] / 3;
         worst = std::max(worst, dist(c));
     }
     return worst;

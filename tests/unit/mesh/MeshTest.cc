@@ -1,10 +1,10 @@
 // MeshTest.cc - the mesh validity function on hand-made meshes, and both meshers on analytic
 // shapes, real frames and generated scenes: watertight, agreeing with OpenVDB's volumeToMesh,
 // deterministic.
-#include "TestData.h"
 #include "../field/BruteForce.h"
-#include "MeshDistance.h"
 #include "../field/RequireGpu.h"
+#include "MeshDistance.h"
+#include "TestData.h"
 
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/MeshLevelSet.h>
@@ -27,7 +27,7 @@ TriangleMesh tetrahedron()
 {
     TriangleMesh m;
     m.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};  // counter-clockwise from outside
+    m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}; // counter-clockwise from outside
     return m;
 }
 
@@ -51,26 +51,30 @@ TEST(MeshCheck, FindsEachKindOfDefect)
     EXPECT_EQ(checkMesh(flipped).misorientedEdges, 3u);
 
     TriangleMesh inward = tetrahedron();
-    for (auto& t : inward.triangles) std::swap(t[1], t[2]);
+    for (auto& t : inward.triangles)
+        std::swap(t[1], t[2]);
     EXPECT_NEAR(checkMesh(inward).volume, -1.0 / 6, 1e-12);
 
     TriangleMesh fin = tetrahedron();
     fin.points.push_back({1, 1, 1});
-    fin.triangles.push_back({1, 2, 4});  // a third triangle on edge 1-2
+    fin.triangles.push_back({1, 2, 4}); // a third triangle on edge 1-2
     EXPECT_EQ(checkMesh(fin).nonManifoldEdges, 1u);
 
-    TriangleMesh bowtie = tetrahedron();  // a second tetrahedron touching the first at vertex 1
+    TriangleMesh bowtie = tetrahedron(); // a second tetrahedron touching the first at vertex 1
     const uint32_t base = uint32_t(bowtie.points.size());
-    for (const Vec3f& p : tetrahedron().points) bowtie.points.push_back({2 - p.x, -p.y, -p.z});
-    for (auto t : tetrahedron().triangles) bowtie.triangles.push_back({t[0] == 0 ? 1 : t[0] + base, t[2] == 0 ? 1 : t[2] + base, t[1] == 0 ? 1 : t[1] + base});
-    bowtie.points[base] = bowtie.points[1];  // (unused copy of the shared vertex)
+    for (const Vec3f& p : tetrahedron().points)
+        bowtie.points.push_back({2 - p.x, -p.y, -p.z});
+    for (auto t : tetrahedron().triangles)
+        bowtie.triangles.push_back({t[0] == 0 ? 1 : t[0] + base, t[2] == 0 ? 1 : t[2] + base,
+                                    t[1] == 0 ? 1 : t[1] + base});
+    bowtie.points[base] = bowtie.points[1]; // (unused copy of the shared vertex)
     const MeshReport b = checkMesh(bowtie);
     EXPECT_EQ(b.nonManifoldVertices, 1u) << describe(b);
     EXPECT_EQ(b.components, 1u);
     EXPECT_EQ(b.unusedVertices, 1u);
 
     TriangleMesh flat = tetrahedron();
-    flat.points[3] = {0.5f, 0.5f, 0};  // on the hypotenuse of the base: triangle 1-2-3 has no area
+    flat.points[3] = {0.5f, 0.5f, 0}; // on the hypotenuse of the base: triangle 1-2-3 has no area
     flat.triangles = {{1, 2, 3}};
     EXPECT_EQ(checkMesh(flat).degenerateTriangles, 1u);
     flat.triangles = {{1, 1, 2}};
@@ -80,14 +84,15 @@ TEST(MeshCheck, FindsEachKindOfDefect)
 /// How closely our mesh must agree with volumeToMesh on the same grid.
 struct Agreement
 {
-    double volume = 0.01, area = 0.01;  ///< relative
-    double toOpenVdb = 0.5;             ///< largest distance of our mesh from OpenVDB's, voxels
-    double fromOpenVdb = 0.5;           ///< largest distance of OpenVDB's mesh from ours, voxels
+    double volume = 0.01, area = 0.01; ///< relative
+    double toOpenVdb = 0.5;            ///< largest distance of our mesh from OpenVDB's, voxels
+    double fromOpenVdb = 0.5;          ///< largest distance of OpenVDB's mesh from ours, voxels
 };
 
 /// Our mesh is watertight and outward; it agrees with volumeToMesh on the same grid (distances
 /// sampled at the vertices and triangle centroids of both meshes).
-void checkBothMeshers(const openvdb::FloatGrid& grid, const std::string& what, const Agreement& bound = {})
+void checkBothMeshers(const openvdb::FloatGrid& grid, const std::string& what,
+                      const Agreement& bound = {})
 {
     const double dx = grid.voxelSize()[0];
     const TriangleMesh own = meshLevelSet(grid, Mesher::MarchingCubes);
@@ -99,11 +104,16 @@ void checkBothMeshers(const openvdb::FloatGrid& grid, const std::string& what, c
     EXPECT_GT(r.volume, 0) << what;
     const TriangleMesh vdb = meshLevelSet(grid, Mesher::OpenVdb);
     const MeshReport o = checkMesh(vdb);
-    EXPECT_NEAR(r.volume / o.volume, 1, bound.volume) << what << ": ours " << describe(r) << "; openvdb " << describe(o);
-    EXPECT_NEAR(r.area / o.area, 1, bound.area) << what << ": ours " << describe(r) << "; openvdb " << describe(o);
-    const double to = test::oneSidedDistance(own, vdb, dx) / dx, from = test::oneSidedDistance(vdb, own, dx) / dx;
-    EXPECT_LE(to, bound.toOpenVdb) << what << ": our mesh is up to " << to << " voxel from OpenVDB's";
-    EXPECT_LE(from, bound.fromOpenVdb) << what << ": OpenVDB's mesh is up to " << from << " voxel from ours";
+    EXPECT_NEAR(r.volume / o.volume, 1, bound.volume)
+        << what << ": ours " << describe(r) << "; openvdb " << describe(o);
+    EXPECT_NEAR(r.area / o.area, 1, bound.area)
+        << what << ": ours " << describe(r) << "; openvdb " << describe(o);
+    const double to = test::oneSidedDistance(own, vdb, dx) / dx,
+                 from = test::oneSidedDistance(vdb, own, dx) / dx;
+    EXPECT_LE(to, bound.toOpenVdb)
+        << what << ": our mesh is up to " << to << " voxel from OpenVDB's";
+    EXPECT_LE(from, bound.fromOpenVdb)
+        << what << ": OpenVDB's mesh is up to " << from << " voxel from ours";
     ::testing::Test::RecordProperty(what + "_volume_ratio", std::to_string(r.volume / o.volume));
     ::testing::Test::RecordProperty(what + "_area_ratio", std::to_string(r.area / o.area));
     ::testing::Test::RecordProperty(what + "_hausdorff_voxels", std::to_string(std::max(to, from)));
@@ -114,7 +124,7 @@ TEST(MarchingCubes, SingleParticleIsASphereOfRadiusR)
     SceneParams sp;
     sp.radius = 0.1;
     Params p = Params::fromRadius(sp.radius);
-    p.keepIsolated = true;  // a lone particle is isolated: kept as a sphere of radius r
+    p.keepIsolated = true; // a lone particle is isolated: kept as a sphere of radius r
     const RasterizeResult res = rasterizeParticles(generateScene(Scene::Single, sp), p);
     const TriangleMesh mesh = meshLevelSet(*res.grid);
     ASSERT_FALSE(mesh.empty());
@@ -126,7 +136,8 @@ TEST(MarchingCubes, SingleParticleIsASphereOfRadiusR)
         const double d = std::sqrt(double(v.x) * v.x + double(v.y) * v.y + double(v.z) * v.z);
         ASSERT_NEAR(d, sp.radius, 0.1 * p.voxelSize) << "vertex " << i;
         const Vec3f& n = mesh.normals[i];
-        EXPECT_GT((n.x * v.x + n.y * v.y + n.z * v.z) / d, 0.99) << "normal of vertex " << i << " not radial";
+        EXPECT_GT((n.x * v.x + n.y * v.y + n.z * v.z) / d, 0.99)
+            << "normal of vertex " << i << " not radial";
     }
     // (Not compared with volumeToMesh: a sphere one voxel across is an octahedron here and a
     // cube there.)
@@ -136,11 +147,14 @@ TEST(MarchingCubes, OpenVdbSphereFromAnotherTool)
 {
     openvdb::initialize();
     const float radius = 1.3f, dx = 0.1f;
-    auto grid = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(radius, openvdb::Vec3f(0.2f, -0.1f, 0.05f), dx);
+    auto grid = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        radius, openvdb::Vec3f(0.2f, -0.1f, 0.05f), dx);
     const TriangleMesh mesh = meshLevelSet(*grid);
     double worst = 0;
     for (const Vec3f& v : mesh.points)
-        worst = std::max(worst, std::abs(std::sqrt(std::pow(v.x - 0.2, 2) + std::pow(v.y + 0.1, 2) + std::pow(v.z - 0.05, 2)) - radius));
+        worst = std::max(worst, std::abs(std::sqrt(std::pow(v.x - 0.2, 2) + std::pow(v.y + 0.1, 2) +
+                                                   std::pow(v.z - 0.05, 2)) -
+                                         radius));
     EXPECT_LE(worst, 0.1 * dx);
     checkBothMeshers(*grid, "openvdb_sphere");
 }
@@ -148,34 +162,42 @@ TEST(MarchingCubes, OpenVdbSphereFromAnotherTool)
 TEST(MarchingCubes, LatticeBallMatchesTheField)
 {
     SceneParams sp;
-    sp.count = 4000;  // rho about 9.8 spacings
+    sp.count = 4000; // rho about 9.8 spacings
     const ParticleSet ps = generateScene(Scene::Ball, sp);
     const Params p = Params::fromRadius(sp.radius);
     const RasterizeResult res = rasterizeParticles(ps, p);
     const TriangleMesh mesh = meshLevelSet(*res.grid);
     ASSERT_TRUE(checkMesh(mesh).watertight()) << describe(checkMesh(mesh));
     double meanVertex = 0;
-    for (const Vec3f& v : mesh.points) meanVertex += std::sqrt(double(v.x) * v.x + double(v.y) * v.y + double(v.z) * v.z);
+    for (const Vec3f& v : mesh.points)
+        meanVertex += std::sqrt(double(v.x) * v.x + double(v.y) * v.y + double(v.z) * v.z);
     meanVertex /= double(mesh.points.size());
     // The field's own zero radius, by bisection of the brute-force field along 64 directions
     // (a golden-angle spiral), averaged.
     std::vector<std::array<double, 3>> pts;
-    for (const Vec3f& q : ps.positions) pts.push_back({q.x, q.y, q.z});
-    const test::ReferenceParams rp{p.radius, p.influenceRadius, p.smoothingLength, p.tLow, p.tHigh, p.background(), true};
+    for (const Vec3f& q : ps.positions)
+        pts.push_back({q.x, q.y, q.z});
+    const test::ReferenceParams rp{
+        p.radius, p.influenceRadius, p.smoothingLength, p.tLow, p.tHigh, p.background(), true};
     double meanField = 0;
     const int rays = 64;
     for (int k = 0; k < rays; ++k) {
-        const double z = 1 - (k + 0.5) * 2 / rays, s = std::sqrt(1 - z * z), phi = k * 2.399963229728653;
+        const double z = 1 - (k + 0.5) * 2 / rays, s = std::sqrt(1 - z * z),
+                     phi = k * 2.399963229728653;
         const std::array<double, 3> dir{s * std::cos(phi), s * std::sin(phi), z};
         double lo = 0, hi = 2 * meanVertex;
         for (int it = 0; it < 40; ++it) {
             const double mid = 0.5 * (lo + hi);
-            (test::referencePhi(pts, {}, {mid * dir[0], mid * dir[1], mid * dir[2]}, rp) < 0 ? lo : hi) = mid;
+            (test::referencePhi(pts, {}, {mid * dir[0], mid * dir[1], mid * dir[2]}, rp) < 0 ? lo
+                                                                                             : hi) =
+                mid;
         }
         meanField += 0.5 * (lo + hi) / rays;
     }
-    EXPECT_NEAR(meanVertex, meanField, 0.2 * sp.radius) << "mesh " << meanVertex << ", field " << meanField;
-    ::testing::Test::RecordProperty("mean_vertex_radius_minus_field_radius_in_r", std::to_string((meanVertex - meanField) / sp.radius));
+    EXPECT_NEAR(meanVertex, meanField, 0.2 * sp.radius)
+        << "mesh " << meanVertex << ", field " << meanField;
+    ::testing::Test::RecordProperty("mean_vertex_radius_minus_field_radius_in_r",
+                                    std::to_string((meanVertex - meanField) / sp.radius));
     checkBothMeshers(*res.grid, "ball");
 }
 
@@ -193,7 +215,8 @@ static void realFramesAreWatertight(Device device)
         const RasterizeResult res = rasterizeParticles(ps, p, f.name);
         Agreement bound;
         bound.area = 0.02, bound.toOpenVdb = 0.75, bound.fromOpenVdb = 0.6;
-        if (!f.fluid || ps.size() < 1000) bound.volume = bound.area = 1.0;  // scattered points, tiny blobs
+        if (!f.fluid || ps.size() < 1000)
+            bound.volume = bound.area = 1.0; // scattered points, tiny blobs
         checkBothMeshers(*res.grid, f.name, bound);
     }
 }
@@ -216,11 +239,13 @@ TEST(MarchingCubes, GeneratedScenesAreWatertight)
     for (Scene scene : {Scene::Block, Scene::Ball, Scene::Slab, Scene::Drop}) {
         SceneParams sp;
         sp.count = 20000;
-        const RasterizeResult res = rasterizeParticles(generateScene(scene, sp), Params::fromRadius(sp.radius));
+        const RasterizeResult res =
+            rasterizeParticles(generateScene(scene, sp), Params::fromRadius(sp.radius));
         checkBothMeshers(*res.grid, sceneName(scene));
         Params coarse = Params::fromRadius(sp.radius);
         coarse.voxelSize = 2 * sp.radius;
-        checkBothMeshers(*rasterizeParticles(generateScene(scene, sp), coarse).grid, std::string(sceneName(scene)) + "_voxel2r");
+        checkBothMeshers(*rasterizeParticles(generateScene(scene, sp), coarse).grid,
+                         std::string(sceneName(scene)) + "_voxel2r");
     }
 }
 
@@ -228,7 +253,8 @@ TEST(MarchingCubes, SameMeshForAnyThreadCount)
 {
     SceneParams sp;
     sp.count = 30000;
-    const RasterizeResult res = rasterizeParticles(generateScene(Scene::Drop, sp), Params::fromRadius(sp.radius));
+    const RasterizeResult res =
+        rasterizeParticles(generateScene(Scene::Drop, sp), Params::fromRadius(sp.radius));
     TriangleMesh one, two;
     {
         tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
@@ -240,8 +266,10 @@ TEST(MarchingCubes, SameMeshForAnyThreadCount)
     }
     ASSERT_EQ(one.points.size(), two.points.size());
     ASSERT_EQ(one.triangles.size(), two.triangles.size());
-    EXPECT_EQ(0, std::memcmp(one.points.data(), two.points.data(), one.points.size() * sizeof(Vec3f)));
-    EXPECT_EQ(0, std::memcmp(one.normals.data(), two.normals.data(), one.normals.size() * sizeof(Vec3f)));
+    EXPECT_EQ(0,
+              std::memcmp(one.points.data(), two.points.data(), one.points.size() * sizeof(Vec3f)));
+    EXPECT_EQ(
+        0, std::memcmp(one.normals.data(), two.normals.data(), one.normals.size() * sizeof(Vec3f)));
     EXPECT_TRUE(one.triangles == two.triangles);
 }
 
@@ -250,7 +278,8 @@ TEST(MarchingCubes, ReadsLevelSetFiles)
     test::TempDir dir;
     SceneParams sp;
     sp.count = 2000;
-    const RasterizeResult res = rasterizeParticles(generateScene(Scene::Ball, sp), Params::fromRadius(sp.radius));
+    const RasterizeResult res =
+        rasterizeParticles(generateScene(Scene::Ball, sp), Params::fromRadius(sp.radius));
     writeLevelSet({res.grid}, dir.path("ball.vdb"));
     const openvdb::FloatGrid::Ptr back = readLevelSet(dir.path("ball.vdb"));
     EXPECT_EQ(back->getName(), "surface");
@@ -260,7 +289,8 @@ TEST(MarchingCubes, ReadsLevelSetFiles)
         readLevelSet(dir.path("ball.vdb"), "density");
         ADD_FAILURE() << "no error";
     } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("surface (float, level set)"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("surface (float, level set)"), std::string::npos)
+            << e.what();
     }
     test::writeFile(dir.path("bad.vdb"), "not a vdb at all");
     EXPECT_THROW(readLevelSet(dir.path("bad.vdb")), InputError);

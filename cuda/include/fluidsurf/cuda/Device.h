@@ -15,8 +15,8 @@ namespace cuda {
 struct DeviceInfo
 {
     bool usable = false;
-    std::string reason;  ///< why not usable (no driver, no device, ...)
-    std::string name;    ///< e.g. "NVIDIA H100 80GB HBM3"
+    std::string reason; ///< why not usable (no driver, no device, ...)
+    std::string name;   ///< e.g. "NVIDIA H100 80GB HBM3"
     int computeMajor = 0, computeMinor = 0;
     size_t memoryBytes = 0;
 };

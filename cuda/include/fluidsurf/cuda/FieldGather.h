@@ -28,10 +28,10 @@ struct FieldSettings
 
 struct GatherInput
 {
-    const Vec3f* positions = nullptr;   ///< particles in cell order
-    const float* radii = nullptr;       ///< per particle, or null for the uniform radius
+    const Vec3f* positions = nullptr; ///< particles in cell order
+    const float* radii = nullptr;     ///< per particle, or null for the uniform radius
     size_t particleCount = 0;
-    const uint32_t* cellStarts = nullptr;  ///< cellCount + 1 offsets into the particles
+    const uint32_t* cellStarts = nullptr; ///< cellCount + 1 offsets into the particles
     size_t cellCount = 0;
     /// The cell index's hash table (neighbors::CellIndex): Morton key per slot (~0 when empty)
     /// and the cell it names; tableSize is a power of two.
@@ -40,21 +40,22 @@ struct GatherInput
     size_t tableSize = 0;
     double cellSize = 0, cellOrigin[3] = {0, 0, 0};
     uint32_t cellDims[3] = {0, 0, 0};
-    const int32_t* leafOrigins = nullptr;   ///< 3 per leaf: voxel index of the leaf's corner
-    const uint64_t* leafActive = nullptr;   ///< 8 per leaf: active voxels
+    const int32_t* leafOrigins = nullptr; ///< 3 per leaf: voxel index of the leaf's corner
+    const uint64_t* leafActive = nullptr; ///< 8 per leaf: active voxels
     size_t leafCount = 0;
     FieldSettings field;
 };
 
 struct GatherTimes
 {
-    double uploadMs = 0, kernelMs = 0, downloadMs = 0;  ///< CUDA events on the stream
-    size_t deviceBytes = 0;                              ///< device memory allocated
+    double uploadMs = 0, kernelMs = 0, downloadMs = 0; ///< CUDA events on the stream
+    size_t deviceBytes = 0;                            ///< device memory allocated
 };
 
 /// phi for the 512 voxels of every leaf (leafCount * 512 values, leaf after leaf, OpenVDB's voxel
 /// order); inactive voxels hold the background. Throws fluidsurf::Error on CUDA errors.
-std::vector<float> gatherField(const GatherInput& input, GatherTimes* times = nullptr, void* stream = nullptr);
+std::vector<float> gatherField(const GatherInput& input, GatherTimes* times = nullptr,
+                               void* stream = nullptr);
 
 } // namespace cuda
 } // namespace fluidsurf

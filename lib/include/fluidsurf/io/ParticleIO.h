@@ -42,7 +42,7 @@ struct ReadOptions
 struct ReadInfo
 {
     ParticleFormat format = ParticleFormat::Unknown;
-    std::string detail;          ///< e.g. "BINARY UNSTRUCTURED_GRID", "appended raw, zlib"
+    std::string detail; ///< e.g. "BINARY UNSTRUCTURED_GRID", "appended raw, zlib"
     uint64_t fileBytes = 0;
     size_t droppedNonFinite = 0;
 };
