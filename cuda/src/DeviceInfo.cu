@@ -1,5 +1,5 @@
 // DeviceInfo.cu - device discovery.
-#include <fluidsurf/cuda/Device.h>
+#include "facade/Device.h"
 
 #include "Check.cuh"
 

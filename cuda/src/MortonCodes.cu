@@ -1,6 +1,6 @@
 // MortonCodes.cu - Z-order cell codes on the GPU: the first step of the neighbour structure
 // (thesis §4.2.1, "handler array" keys), one thread per particle.
-#include <fluidsurf/cuda/Device.h>
+#include "facade/Device.h"
 
 #include "Check.cuh"
 #include "Morton.cuh"

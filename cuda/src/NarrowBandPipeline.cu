@@ -1,6 +1,6 @@
 // NarrowBandPipeline.cu - runs the device stages (Stages.cuh) in order on one stream and moves
 // the leaf blocks back (see fluidsurf/cuda/NarrowBandPipeline.h).
-#include <fluidsurf/cuda/NarrowBandPipeline.h>
+#include "facade/NarrowBandPipeline.h"
 
 #include "Stages.cuh"
 

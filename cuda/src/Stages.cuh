@@ -7,14 +7,14 @@
 #include "classify/ClassRule.h"
 #include "field/FieldMath.h"
 
-#include <fluidsurf/cuda/FieldGather.h>
+#include "facade/FieldGather.h"
 
 #include <cstdint>
 
 namespace fluidsurf {
 namespace cuda {
 
-// --- SortCells.cu: Morton keys, radix sort, cell ranges, hash table ------------------------
+// --- CellIndex.cu (neighbors/CellIndex): Morton keys, radix sort, cell ranges, hash table --------
 
 /// Bounds of n positions (float min and max per axis) into lo/hi on the host (synchronises).
 void particleBounds(const float3* positions, size_t n, float lo[3], float hi[3], DeviceMemory& mem,
@@ -26,7 +26,7 @@ void particleBounds(const float3* positions, size_t n, float lo[3], float hi[3],
 void sortIntoCells(DeviceCells& cells, const float3* positions, const float* radii, size_t n,
                    DeviceMemory& mem, cudaStream_t stream, StageEvents& events);
 
-// --- Classify.cu (compiled without FMA contraction: bit-identical to the CPU) --------------
+// --- Classify.cu (classify/Classify; compiled without FMA contraction: bit-identical to the CPU) -
 
 struct ClassifySettings
 {
@@ -45,7 +45,7 @@ void classifyParticles(const DeviceCells& cells, const ClassifySettings& s, uint
 void takeIsolated(DeviceCells& cells, const uint8_t* classes, size_t isolatedCount, bool drop,
                   std::vector<uint32_t>& indices, DeviceMemory& mem, cudaStream_t stream);
 
-// --- MarkBand.cu (no FMA contraction: the same voxel ranges as the CPU) --------------------
+// --- NarrowBand.cu (narrowband/NarrowBand) (no FMA contraction: the same voxel ranges as the CPU)
 
 struct BandSettings
 {
@@ -67,7 +67,7 @@ struct DeviceLeaves
 DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const BandSettings& s,
                       DeviceMemory& mem, cudaStream_t stream);
 
-// --- FieldGather.cu --------------------------------------------------------------------------
+// --- GatherField.cu (field/GatherField) ----------------------------------------------------------
 
 /// FieldMath's constants from the facade's settings.
 field::FieldConstants fieldConstants(const FieldSettings& s, bool perParticleRadii);

@@ -86,17 +86,4 @@ FieldMethod methodFromName(const std::string& name)
     throw ValueError("unknown method '" + name + "' (narrow-band, gather-full, scatter)");
 }
 
-const char* deviceName(Device d)
-{
-    return d == Device::Cpu ? "cpu" : d == Device::Cuda ? "cuda" : "auto";
-}
-
-Device deviceFromName(const std::string& name)
-{
-    if (name == "cpu") return Device::Cpu;
-    if (name == "cuda") return Device::Cuda;
-    if (name == "auto") return Device::Auto;
-    throw ValueError("unknown device '" + name + "' (cpu, cuda, auto)");
-}
-
 } // namespace fluidsurf

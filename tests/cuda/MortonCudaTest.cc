@@ -1,6 +1,6 @@
 // CUDA Morton codes against a bit-by-bit interleaving on the host. Skipped without a GPU.
+#include "facade/Device.h"
 #include <fluidsurf/Error.h>
-#include <fluidsurf/cuda/Device.h>
 
 #include <gtest/gtest.h>
 

@@ -101,33 +101,41 @@ bool isDeviceFieldStage(const std::string& name)
            name == "isolated" || name == "gather";
 }
 
-Row runOurs(const Case& c, const Params& p, int threads, int repeat, const std::string& label)
+Row runOurs(const Case& c, const Params& p, Device device, int threads, int repeat,
+            const std::string& label)
 {
     Row row{c.name, label, c.particles.size(), p.voxelSize / c.radius, p.influenceRadius / c.radius,
             threads};
     std::vector<double> totals;
     std::map<std::string, std::vector<double>> stages;
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    Context ctx(device);
+    ctx.setThreads(threads);
     resetPeakRss();
     std::map<std::string, std::vector<double>> gpu;
     std::vector<std::string> gpuOrder;
     size_t gpuBytes = 0;
-    std::string device;
+    std::string ranOn;
     for (int k = 0; k < repeat; ++k) {
-        const RasterizeResult r = rasterizeParticles(c.particles, p);
-        totals.push_back(r.stats.totalSeconds());
-        for (const StageTime& s : r.stats.stages)
-            stages[s.name].push_back(s.seconds);
+        ctx.timing().clear();
+        const RasterizeResult r = rasterizeParticles(c.particles, p, ctx);
+        // The stages are the children of the "rasterize" scope of the timing tree.
+        const TimingTree& tree = ctx.timing();
+        for (const TimingTree::Node& n : tree.nodes())
+            if (n.name == "rasterize") {
+                totals.push_back(n.seconds);
+                for (size_t child : n.children)
+                    stages[tree.nodes()[child].name].push_back(tree.nodes()[child].seconds);
+            }
         for (const StageTime& s : r.stats.gpuStages) {
             if (!gpu.count(s.name)) gpuOrder.push_back(s.name);
             gpu[s.name].push_back(s.seconds);
         }
-        gpuBytes = r.stats.gpuBytes, device = r.stats.device;
+        gpuBytes = r.stats.gpuBytes, ranOn = r.stats.device;
         row.evaluations = r.stats.fieldEvaluations;
         row.activeVoxels = r.stats.activeVoxels;
     }
     if (!gpu.empty()) {
-        std::string note = c.name + " on " + device + ":";
+        std::string note = c.name + " on " + ranOn + ":";
         for (const std::string& name : gpuOrder) {
             char buf[96];
             std::snprintf(buf, sizeof(buf), " %s %.2f ms,", name.c_str(), median(gpu[name]) * 1e3);
@@ -193,9 +201,8 @@ int runFieldBench(const FieldBenchOptions& o)
                 for (const std::string& m : methods) {
                     if (m == "narrow-band-cuda") {
                         p.method = FieldMethod::NarrowBand;
-                        p.device = Device::Cuda;
-                        const Row r = runOurs(c, p, hw, o.repeat, "narrow band, CUDA");
-                        p.device = Device::Cpu;
+                        const Row r =
+                            runOurs(c, p, Device::Cuda, hw, o.repeat, "narrow band, CUDA");
                         printRow(r, reference);
                         std::string note = r.gpu;
                         if (r.gpuFieldMs > 0) {
@@ -220,8 +227,8 @@ int runFieldBench(const FieldBenchOptions& o)
                         gpuNotes.push_back(note);
                     } else if (m == "narrow-band" || m == "narrow-band-1") {
                         p.method = FieldMethod::NarrowBand;
-                        const Row r =
-                            runOurs(c, p, m == "narrow-band" ? hw : 1, o.repeat, "narrow band");
+                        const Row r = runOurs(c, p, Device::Cpu, m == "narrow-band" ? hw : 1,
+                                              o.repeat, "narrow band");
                         if (m == "narrow-band")
                             reference = r.median, cpuField = r.cpuFieldSeconds();
                         else
@@ -229,9 +236,9 @@ int runFieldBench(const FieldBenchOptions& o)
                         printRow(r, reference);
                     } else if (m == "gather-full" || m == "scatter") {
                         p.method = methodFromName(m);
-                        printRow(
-                            runOurs(c, p, m == "scatter" ? 1 : hw, std::max(1, o.repeat / 2), m),
-                            reference);
+                        printRow(runOurs(c, p, Device::Cpu, m == "scatter" ? 1 : hw,
+                                         std::max(1, o.repeat / 2), m),
+                                 reference);
                     } else if (m == "p2ls" || m == "smooth") {
                         std::vector<double> t, setup;
                         BaselineResult b;

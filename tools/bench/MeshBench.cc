@@ -5,6 +5,7 @@
 
 #include <fluidsurf/MeshLevelSet.h>
 #include <fluidsurf/Rasterize.h>
+#include <fluidsurf/Reconstruct.h>
 #include <fluidsurf/io/MeshIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
@@ -32,20 +33,16 @@ int runMeshBench(const MeshBenchOptions& o)
             p.voxelSize = std::stod(v) * c.radius;
             std::vector<double> field;
             RasterizeResult res;
-            for (int k = 0; k < o.repeat; ++k) {
-                res = rasterizeParticles(c.particles, p);
-                field.push_back(res.stats.totalSeconds());
-            }
+            for (int k = 0; k < o.repeat; ++k)
+                field.push_back(seconds([&] { res = rasterizeParticles(c.particles, p); }));
             const double fieldSeconds = median(field);
             double ours = 0;
             for (Mesher m : {Mesher::MarchingCubes, Mesher::OpenVdb}) {
                 std::vector<double> t;
                 MeshStats ms;
                 resetPeakRss();
-                for (int k = 0; k < o.repeat; ++k) {
-                    meshLevelSet(*res.grid, m, &ms);
-                    t.push_back(ms.seconds);
-                }
+                for (int k = 0; k < o.repeat; ++k)
+                    t.push_back(seconds([&] { meshLevelSet(*res.grid, m, &ms); }));
                 const double s = median(t);
                 if (m == Mesher::MarchingCubes) ours = s;
                 std::printf(
@@ -58,28 +55,32 @@ int runMeshBench(const MeshBenchOptions& o)
                         : (std::to_string(s / ours).substr(0, 4) + "x").c_str());
                 std::fflush(stdout);
             }
-            // Whole pipeline, as `fluidsurf reconstruct` runs it (without process start-up).
-            std::vector<double> read, total, write;
+            // Whole pipeline, as `fluidsurf reconstruct` runs it (without process start-up):
+            // read, the one library call reconstruct(), write.
+            std::vector<double> read, total, write, wholeField, wholeMesh;
             const std::string out = o.dir + "/fluidsurf_bench_mesh.obj";
+            ReconstructParams rp = ReconstructParams::fromRadius(c.radius);
+            rp.field.voxelSize = std::stod(v);
             for (int k = 0; k < o.repeat; ++k) {
                 double r = 0;
                 ParticleSet loaded;
                 if (!c.path.empty()) r = seconds([&] { loaded = io::readParticles(c.path); });
-                const RasterizeResult rr =
-                    rasterizeParticles(c.path.empty() ? c.particles : loaded, p);
-                MeshStats ms;
-                const TriangleMesh mesh = meshLevelSet(*rr.grid, Mesher::MarchingCubes, &ms);
-                const double w = seconds([&] { io::writeMesh(mesh, out); });
-                read.push_back(r), write.push_back(w),
-                    total.push_back(r + rr.stats.totalSeconds() + ms.seconds + w);
+                Context ctx;
+                ReconstructResult rr;
+                const double call = seconds(
+                    [&] { rr = reconstruct(c.path.empty() ? c.particles : loaded, rp, ctx); });
+                const double w = seconds([&] { io::writeMesh(rr.mesh, out); });
+                read.push_back(r), write.push_back(w), total.push_back(r + call + w);
+                wholeField.push_back(ctx.timing().seconds("rasterize"));
+                wholeMesh.push_back(ctx.timing().seconds("mesh"));
             }
             std::remove(out.c_str());
             char line[512];
-            std::snprintf(line, sizeof(line),
-                          "| %s | %s r | %s | %.3f | %.3f | %.4f | %.3f | %.0f |", c.name.c_str(),
-                          v.c_str(),
-                          c.path.empty() ? "-" : std::to_string(median(read)).substr(0, 6).c_str(),
-                          fieldSeconds, ours, median(write), median(total), peakRssMiB());
+            std::snprintf(
+                line, sizeof(line), "| %s | %s r | %s | %.3f | %.3f | %.4f | %.3f | %.0f |",
+                c.name.c_str(), v.c_str(),
+                c.path.empty() ? "-" : std::to_string(median(read)).substr(0, 6).c_str(),
+                median(wholeField), median(wholeMesh), median(write), median(total), peakRssMiB());
             pipeline.push_back(line);
         }
     std::printf(

@@ -1,8 +1,14 @@
-// InfoCommand.cc - `fluidsurf info FILE...`: format, count, attributes, bounds, spacing estimate.
+// InfoCommand.cc - `fluidsurf info FILE...`: what a file holds. Particle files: format, count,
+// attributes, bounds, spacing estimate. .vdb files: every grid (name, class, type, voxel size,
+// active voxels, bounding box, metadata), then the particles of a points grid. Meshes (.obj, and
+// .ply with faces): vertices, triangles and the checkMesh report.
 #include "Commands.h"
 #include "Frames.h"
 
+#include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/SpacingEstimate.h>
+#include <fluidsurf/io/LevelSetIO.h>
+#include <fluidsurf/io/MeshIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
 #include <cstdio>
@@ -79,23 +85,91 @@ void printInfo(const std::string& path, const InfoOptions& o)
     }
 }
 
+/// Lower-case extension check.
+bool hasExtension(const std::string& path, const char* ext)
+{
+    const std::string e(ext);
+    if (path.size() < e.size()) return false;
+    for (size_t i = 0; i < e.size(); ++i)
+        if (std::tolower(uint8_t(path[path.size() - e.size() + i])) != e[i]) return false;
+    return true;
+}
+
+/// The grids of a .vdb; true when one of them holds points (then the particle lines follow).
+bool printVdb(const std::string& path)
+{
+    const std::vector<io::GridDescription> grids = io::describeVdb(path);
+    std::printf("%s\n", path.c_str());
+    std::printf("  format      OpenVDB, %zu grid%s\n", grids.size(), grids.size() == 1 ? "" : "s");
+    bool points = false;
+    for (const io::GridDescription& g : grids) {
+        points |= g.valueType == "ptdataidx32";
+        std::printf("  grid        '%s'  class %s, type %s\n", g.name.c_str(), g.gridClass.c_str(),
+                    g.valueType.c_str());
+        std::printf("    voxel size  (%.6g, %.6g, %.6g)%s\n", g.voxelSize[0], g.voxelSize[1],
+                    g.voxelSize[2], g.linear ? "" : " (frustum transform)");
+        std::printf("    active      %s voxels in %s leaves\n", grouped(g.activeVoxels).c_str(),
+                    grouped(g.leaves).c_str());
+        if (g.empty)
+            std::printf("    bbox        (empty)\n");
+        else
+            std::printf("    bbox        [%lld, %lld, %lld] .. [%lld, %lld, %lld] (index space)\n",
+                        (long long)g.bboxMin[0], (long long)g.bboxMin[1], (long long)g.bboxMin[2],
+                        (long long)g.bboxMax[0], (long long)g.bboxMax[1], (long long)g.bboxMax[2]);
+        if (!g.background.empty()) std::printf("    background  %s\n", g.background.c_str());
+        for (const auto& m : g.metadata)
+            std::printf("    %-28s %s\n", m.first.c_str(), m.second.c_str());
+    }
+    return points;
+}
+
+void printMesh(const std::string& path, const TriangleMesh& mesh)
+{
+    const MeshReport r = checkMesh(mesh);
+    std::printf("%s\n", path.c_str());
+    std::printf("  format      %s mesh\n", hasExtension(path, ".obj") ? "OBJ" : "PLY");
+    std::printf("  vertices    %s%s\n", grouped(mesh.points.size()).c_str(),
+                mesh.normals.empty() ? "" : " (with normals)");
+    std::printf("  triangles   %s\n", grouped(mesh.triangles.size()).c_str());
+    std::printf("  check       %s\n", describe(r).c_str());
+}
+
+void describeFile(const std::string& path, const InfoOptions& o)
+{
+    if (hasExtension(path, ".vdb")) {
+        if (printVdb(path)) printInfo(path, o);
+        return;
+    }
+    if (hasExtension(path, ".obj")) return printMesh(path, io::readMesh(path));
+    if (hasExtension(path, ".ply")) {
+        // A PLY with faces is a mesh; without, a particle file.
+        const TriangleMesh mesh = io::readMesh(path);
+        if (!mesh.triangles.empty()) return printMesh(path, mesh);
+    }
+    printInfo(path, o);
+}
+
 } // namespace
 
 Runner addInfoCommand(CLI::App& app)
 {
     auto o = std::make_shared<InfoOptions>();
-    CLI::App* cmd = app.add_subcommand(
-        "info", "Show what a particle file holds: format, count, attributes, bounds, spacing");
-    cmd->add_option("files", o->files, "particle files or frame patterns")->required();
+    CLI::App* cmd = app.add_subcommand("info", "Show what a particle file, .vdb or mesh holds");
+    cmd->add_option("files", o->files, "particle files, .vdb files, meshes (.obj .ply) or patterns")
+        ->required();
     cmd->add_option("--frames", o->frames, "frame range A-B for a pattern");
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
                   "drop particles with NaN/Inf coordinates instead of failing");
     cmd->add_flag("--no-spacing", o->noSpacing, "skip the nearest-neighbour spacing estimate");
-    cmd->footer("Example: fluidsurf info frame.bgeo 'sim/fluid_{:04}.vtk' --frames 1-3");
+    cmd->footer(
+        "Examples:\n"
+        "  fluidsurf info frame.bgeo 'sim/fluid_{:04}.vtk' --frames 1-3\n"
+        "  fluidsurf info frame.vdb         grids: class, voxel size, active voxels, metadata\n"
+        "  fluidsurf info frame.obj         mesh: vertices, triangles, watertightness");
     return [o]() {
         for (const std::string& f : o->files)
             for (const FrameJob& job : planFrames(f, "", o->frames))
-                printInfo(job.input, *o);
+                describeFile(job.input, *o);
         return 0;
     };
 }

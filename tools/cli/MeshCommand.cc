@@ -1,18 +1,18 @@
-// MeshCommand.cc - `fluidsurf mesh IN.vdb -o OUT.obj` (level set -> mesh) and
-// `fluidsurf reconstruct IN -o OUT.obj [--vdb OUT.vdb]` (particles -> mesh in one pass).
+// MeshCommand.cc - `fluidsurf mesh IN.vdb -o OUT.obj` (level set -> mesh: meshLevelSet) and
+// `fluidsurf reconstruct IN -o OUT.obj [--vdb OUT.vdb]` (particles -> mesh: reconstruct).
+// Parse -> params -> one library call -> write -> report.
 #include "Commands.h"
-#include "FieldOptions.h"
 #include "Frames.h"
+#include "Options.h"
 #include "Progress.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshCheck.h>
-#include <fluidsurf/MeshLevelSet.h>
-#include <fluidsurf/Rasterize.h>
+#include <fluidsurf/Reconstruct.h>
+#include <fluidsurf/io/LevelSetIO.h>
 #include <fluidsurf/io/MeshIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
-#include <chrono>
 #include <cstdio>
 #include <memory>
 
@@ -21,18 +21,11 @@ namespace cli {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t)
-{
-    return std::chrono::duration<double>(Clock::now() - t).count();
-}
-
 struct MeshOptions
 {
-    std::string input, output, frames, grid, mesher = "mc", vdb;
-    FieldOptions field;
-    int threads = 0;
-    bool check = false, dropNonFinite = false, quiet = false, verbose = false;
+    std::string input, output, frames, grid, vdb;
+    PipelineOptions pipeline;
+    bool dropNonFinite = false;
 };
 
 void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o)
@@ -40,17 +33,7 @@ void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o)
     cmd->add_option("-o,--output", o.output, "output mesh (.obj, .ply or .vtk) or pattern")
         ->required();
     cmd->add_option("--frames", o.frames, "frame range A-B for a pattern");
-    cmd->add_option("--mesher", o.mesher,
-                    "mc (our marching cubes) or openvdb (OpenVDB's volumeToMesh)")
-        ->capture_default_str()
-        ->check(CLI::IsMember({"mc", "openvdb"}));
-    cmd->add_option("-j,--threads", o.threads, "worker threads (default: all cores)")
-        ->check(CLI::NonNegativeNumber);
-    cmd->add_flag(
-        "--check", o.check,
-        "check the mesh (boundary and non-manifold edges, orientation, ...) and print it");
-    cmd->add_flag("-q,--quiet", o.quiet, "no progress bar and no per-frame lines");
-    cmd->add_flag("-v,--verbose", o.verbose, "per-stage timings and peak memory");
+    addRunOptions(cmd, o.pipeline, true);
 }
 
 std::vector<FrameJob> planMeshJobs(const MeshOptions& o)
@@ -62,29 +45,36 @@ std::vector<FrameJob> planMeshJobs(const MeshOptions& o)
     return jobs;
 }
 
-/// Mesh a grid, write it, and print the frame's line (and the stage lines with -v).
-void meshAndWrite(const MeshOptions& o, const openvdb::FloatGrid& grid, const FrameJob& job,
-                  bool bar, std::vector<StageTime>& stages)
+/// Write the mesh, check it with --check, and print the frame's lines.
+void writeAndReport(const MeshOptions& o, Context& ctx, const TriangleMesh& mesh,
+                    const FrameJob& job, bool bar, Report& report,
+                    std::vector<std::pair<std::string, double>> counts,
+                    const RasterizeStats* field = nullptr)
 {
-    MeshStats ms;
-    const TriangleMesh mesh = meshLevelSet(grid, mesherFromName(o.mesher), &ms);
-    stages.push_back({std::string("mesh (") + o.mesher + ")", ms.seconds});
-    const auto t = Clock::now();
-    io::writeMesh(mesh, job.output);
-    stages.push_back({"write mesh", since(t)});
-    if (!o.quiet && !bar) {
-        double total = 0;
-        for (const StageTime& s : stages)
-            total += s.seconds;
+    const PipelineOptions& po = o.pipeline;
+    {
+        const auto t = ctx.scope("write mesh");
+        io::writeMesh(mesh, job.output);
+    }
+    MeshReport check;
+    if (po.check) {
+        const auto t = ctx.scope("check");
+        check = checkMesh(mesh);
+    }
+    ctx.timing().finish();
+    if (!po.quiet && !bar)
         std::printf("%s -> %s: %zu vertices, %zu triangles, %.3f s\n", job.input.c_str(),
-                    job.output.c_str(), mesh.points.size(), mesh.triangles.size(), total);
+                    job.output.c_str(), mesh.points.size(), mesh.triangles.size(),
+                    ctx.timing().root().seconds);
+    if (po.check) {
+        const auto more = meshCounts(check);
+        counts.insert(counts.end(), more.begin(), more.end());
+    } else {
+        counts.push_back({"vertices", double(mesh.points.size())});
+        counts.push_back({"triangles", double(mesh.triangles.size())});
     }
-    if (o.verbose) {
-        for (const StageTime& s : stages)
-            std::printf("  %-16s %8.4f s\n", s.name.c_str(), s.seconds);
-        std::printf("  peak memory %.1f MiB\n", peakRssMiB());
-    }
-    if (o.check) std::printf("  mesh: %s\n", describe(checkMesh(mesh)).c_str());
+    report.frame(job.input, ctx, counts, field);
+    if (po.check) std::printf("  mesh: %s\n", describe(check).c_str());
 }
 
 } // namespace
@@ -105,18 +95,30 @@ Runner addMeshCommand(CLI::App& app)
         "Reads any VDB level set (ours or another tool's); meshes its zero crossing with\n"
         "outward (counter-clockwise) triangles and vertex normals from the field gradient.");
     return [o]() {
+        const PipelineOptions& po = o->pipeline;
         const auto jobs = planMeshJobs(*o);
-        const auto threads = limitThreads(o->threads);
-        Progress bar(jobs.size(), "mesh", o->quiet);
+        const Mesher mesher = mesherFromName(po.mesher);
+        Context ctx;
+        po.setUp(ctx);
+        Progress bar(jobs.size(), "mesh", po.quiet);
+        Report report(po);
         for (size_t i = 0; i < jobs.size(); ++i) {
             bar.update(i, jobs[i].input);
-            std::vector<StageTime> stages;
-            const auto t = Clock::now();
-            const openvdb::FloatGrid::Ptr grid = readLevelSet(jobs[i].input, o->grid);
-            stages.push_back({"read", since(t)});
-            meshAndWrite(*o, *grid, jobs[i], bar.enabled(), stages);
+            ctx.timing().clear();
+            openvdb::FloatGrid::Ptr grid;
+            {
+                const auto t = ctx.scope("read");
+                grid = io::readLevelSet(jobs[i].input, o->grid);
+            }
+            stopIfInterrupted(ctx);
+            MeshStats ms;
+            const TriangleMesh mesh = meshLevelSet(*grid, mesher, ctx, &ms);
+            writeAndReport(*o, ctx, mesh, jobs[i], bar.enabled(), report,
+                           {{"surface_cells", double(ms.surfaceCells)}});
+            stopIfInterrupted(ctx);
         }
         bar.finish();
+        report.finish();
         return 0;
     };
 }
@@ -128,7 +130,7 @@ Runner addReconstructCommand(CLI::App& app)
         "reconstruct", "Particle frame(s) to triangle mesh(es), level set in memory");
     cmd->add_option("input", o->input, "particle file or frame pattern")->required();
     cmd->add_option("--vdb", o->vdb, "also write the level set to this .vdb file or pattern");
-    addFieldOptions(cmd, o->field);
+    addFieldOptions(cmd, o->pipeline);
     addMeshOutputOptions(cmd, *o);
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
                   "drop particles with NaN/Inf coordinates instead of failing");
@@ -137,43 +139,51 @@ Runner addReconstructCommand(CLI::App& app)
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj --vdb frame.vdb --check\n"
         "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'obj/f_{:04}.obj' --frames 1-100\n"
-        "The same field as 'rasterize' (all its options), then marching cubes.");
+        "  fluidsurf reconstruct frame.bgeo -o frame.obj -v --stats frame.json   (r estimated)\n"
+        "The same field as 'rasterize' (all its options), then marching cubes.\n"
+        "Ctrl-C stops cleanly (exit code 130): no partial file is left.");
     return [o]() {
+        const PipelineOptions& po = o->pipeline;
         auto jobs = planMeshJobs(*o);
         std::vector<FrameJob> vdbJobs;
         if (!o->vdb.empty()) vdbJobs = planVdbFrames(o->input, o->vdb, o->frames, "--vdb");
-        const auto threads = limitThreads(o->threads);
+        ReconstructParams params = po.resolved();
+        Context ctx;
+        po.setUp(ctx);
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
-        prepareDevice(o->field);
-        Progress bar(jobs.size(), "reconstruct", o->quiet);
-        double radius = 0;
+        prepareDevice(ctx.device());
+        Progress bar(jobs.size(), "reconstruct", po.quiet);
+        Report report(po);
         for (size_t i = 0; i < jobs.size(); ++i) {
             bar.update(i, jobs[i].input);
-            std::vector<StageTime> stages;
-            auto t = Clock::now();
+            ctx.timing().clear();
             io::ReadInfo ri;
-            const ParticleSet ps = io::readParticles(jobs[i].input, ro, &ri);
-            stages.push_back({"read", since(t)});
-            if (i == 0) radius = chooseRadius(o->field, ps, !o->quiet); // one r for the sequence
-            const RasterizeResult res =
-                rasterizeParticles(ps, makeParams(o->field, radius), jobs[i].input);
-            for (const StageTime& s : res.stats.stages)
-                stages.push_back(s);
-            if (!vdbJobs.empty()) {
-                t = Clock::now();
-                writeLevelSet({res.grid}, vdbJobs[i].output);
-                stages.push_back({"write vdb", since(t)});
+            ParticleSet ps;
+            {
+                const auto t = ctx.scope("read");
+                ps = io::readParticles(jobs[i].input, ro, &ri);
             }
-            if (!o->quiet && !bar.enabled() && (res.stats.isolated || ri.droppedNonFinite))
+            stopIfInterrupted(ctx);
+            // One radius for the whole sequence: surfaces of neighbouring frames must match.
+            if (i == 0) params.radius = chooseSequenceRadius(po, ps);
+            const ReconstructResult res = reconstruct(ps, params, ctx, jobs[i].input);
+            if (!vdbJobs.empty()) {
+                const auto t = ctx.scope("write vdb");
+                io::writeLevelSet({res.levelSet}, vdbJobs[i].output);
+            }
+            if (!po.quiet && !bar.enabled() && (res.field.isolated || ri.droppedNonFinite))
                 std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",
-                            jobs[i].input.c_str(), res.stats.isolated,
-                            o->field.keepIsolated ? "kept as spheres" : "left out",
+                            jobs[i].input.c_str(), res.field.isolated,
+                            params.field.keepIsolated ? "kept as spheres" : "left out",
                             ri.droppedNonFinite);
-            meshAndWrite(*o, *res.grid, jobs[i], bar.enabled(), stages);
-            if (o->verbose) printDevice(res.stats);
+            std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
+            counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
+            writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, counts, &res.field);
+            stopIfInterrupted(ctx);
         }
         bar.finish();
+        report.finish();
         return 0;
     };
 }

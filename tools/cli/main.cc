@@ -1,6 +1,7 @@
 // main.cc - the fluidsurf command line: parse, dispatch to a subcommand, turn exceptions into
 // one message on stderr and a non-zero exit code.
 #include "Commands.h"
+#include "Options.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/Version.h>
@@ -44,6 +45,7 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
         std::cerr << "fluidsurf: error: " << e.what() << " (see 'fluidsurf --help')\n";
         return e.get_exit_code() ? e.get_exit_code() : 2;
     }
+    cli::installInterruptHandler();
     try {
         if (app.got_subcommand("info")) return info();
         if (app.got_subcommand("convert")) return convert();
@@ -51,6 +53,10 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
         if (app.got_subcommand("rasterize")) return rasterize();
         if (app.got_subcommand("mesh")) return mesh();
         if (app.got_subcommand("reconstruct")) return reconstruct();
+    } catch (const fluidsurf::Cancelled&) {
+        // Ctrl-C: outputs are written through temporary files, so nothing partial is left.
+        std::cerr << "fluidsurf: interrupted; no partial output was written\n";
+        return 130;
     } catch (const fluidsurf::Error& e) {
         std::cerr << "fluidsurf: error: " << e.what() << "\n";
         return 1;

@@ -13,6 +13,7 @@
 // Triangles are counter-clockwise seen from outside (where phi > 0).
 #pragma once
 
+#include <fluidsurf/Context.h>
 #include <fluidsurf/Mesh.h>
 
 #include <openvdb/openvdb.h>
@@ -31,16 +32,16 @@ struct MeshStats
 {
     size_t surfaceCells = 0; ///< cells with a sign change (MarchingCubes only)
     size_t vertices = 0, triangles = 0;
-    double seconds = 0;
 };
 
-/// Triangulate the zero level of grid. ValueError when the grid is not a level set-like
-/// FloatGrid (no active voxels is fine: the mesh is empty).
-TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher = Mesher::MarchingCubes,
+/// Triangulate the zero level of grid (timed in ctx.timing() as "mesh"; the grid's own transform
+/// is the level). ValueError when the grid is not a level set-like FloatGrid (no active voxels
+/// is fine: the mesh is empty); Cancelled when ctx's callback stopped it.
+TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, Context& ctx,
                           MeshStats* stats = nullptr);
 
-/// Read a level set from a .vdb file: the float grid named gridName, or (empty name) the first
-/// grid of class level set, else the first float grid. InputError naming the file otherwise.
-openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string& gridName = "");
+/// The same with a context of its own: CPU, all cores, no callback.
+TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher = Mesher::MarchingCubes,
+                          MeshStats* stats = nullptr);
 
 } // namespace fluidsurf

@@ -6,6 +6,8 @@
 // relative to r (`--voxel 1.0` means voxelSize = 1 * r).
 #pragma once
 
+#include <fluidsurf/Level.h>
+
 #include <string>
 
 namespace fluidsurf {
@@ -23,11 +25,6 @@ enum class FieldMethod {
     GatherFull, ///< baseline: parallel gather at every vertex of the bounding volume
     Scatter     ///< baseline: serial, particles add to every vertex of the bounding volume
 };
-
-/// Where the field is computed. Cuda runs the field gather on the first GPU (narrow band and
-/// gather-full; neighbours, classification and band topology stay on the CPU for now); Auto picks
-/// Cuda when the library was built with CUDA and a usable GPU is present, else Cpu.
-enum class Device { Cpu, Cuda, Auto };
 
 struct Params
 {
@@ -51,7 +48,6 @@ struct Params
                                ///< (default: left out of the grid and reported)
     FieldKind field = FieldKind::Ssp07;
     FieldMethod method = FieldMethod::NarrowBand;
-    Device device = Device::Cpu;
 
     /// The DESIGN.md defaults for particle radius r.
     static Params fromRadius(double r);
@@ -59,14 +55,16 @@ struct Params
     /// Throws ValueError naming the first invalid field.
     void validate() const;
 
-    double background() const { return halfWidth * voxelSize; }
+    /// The grid of the field's finest (today: only) level.
+    Level level() const { return Level{voxelSize}; }
+    /// Level-set background at a level: halfWidth voxels of it.
+    double background(const Level& l) const { return halfWidth * l.voxelSize; }
+    double background() const { return background(level()); }
 };
 
 const char* fieldName(FieldKind f);                  ///< "ssp07", "zb05"
 const char* methodName(FieldMethod m);               ///< "narrow-band", "gather-full", "scatter"
 FieldKind fieldFromName(const std::string& name);    ///< ValueError for unknown names
 FieldMethod methodFromName(const std::string& name); ///< ValueError for unknown names
-const char* deviceName(Device d);                    ///< "cpu", "cuda", "auto"
-Device deviceFromName(const std::string& name);      ///< ValueError for unknown names
 
 } // namespace fluidsurf

@@ -1,17 +1,20 @@
 // Rasterize.h - particles to a narrow-band SSP07 level set (thesis chapter 4), as an ordinary
 // OpenVDB level set: FloatGrid "surface", class GRID_LEVEL_SET, voxel (i,j,k) at (i,j,k) * dx,
 // negative inside, background = halfWidth * dx, metadata naming the parameters (DESIGN.md).
+// The first half of reconstruct() (Reconstruct.h); meshLevelSet is the second.
 //
 //   neighbors (Z-order cells) -> classify (surface / interior / splash / isolated)
-//   -> narrow band (active voxels near surface particles) -> field (TBB gather) -> level set
+//   -> narrow band (active voxels near surface particles) -> field (gather) -> complete band
+//   -> level set
 //
-// With Params::device cuda (or auto and a GPU) the stages up to the field run on the GPU and
-// give the same active voxels and classes; values agree with the CPU's within 1e-5 r.
-//
-// Isolated particles (no neighbour within h) are left out of the grid and listed in the result.
-// The output is identical for any thread count; run under tbb::global_control to limit threads.
+// The stages up to the field run on the Context's backend (lib/src/backend): the CPU (TBB), or
+// with Device::Cuda (or Auto and a GPU) the GPU, which gives the same active voxels and classes
+// and values within 1e-5 r of the CPU's. Band completion asks the same backend for its new
+// voxels. Isolated particles (no neighbour within h) are left out of the grid and listed in the
+// result. The output is identical for any thread count (Context::setThreads).
 #pragma once
 
+#include <fluidsurf/Context.h>
 #include <fluidsurf/Params.h>
 #include <fluidsurf/ParticleSet.h>
 
@@ -22,7 +25,7 @@
 
 namespace fluidsurf {
 
-/// Wall time of one pipeline stage.
+/// Wall time of one stage (the GPU's own stages, from CUDA events).
 struct StageTime
 {
     std::string name;
@@ -37,13 +40,11 @@ struct RasterizeStats
     size_t fieldEvaluations = 0; ///< vertices at which phi was computed
     size_t bandCompletion = 0;   ///< voxels added where a zero crossing reached the band's edge
     double bandWidth = 0;        ///< half width actually used, world units
-    std::vector<StageTime> stages;
-    double totalSeconds() const;
     /// Where the field ran: "cpu", the GPU's name, or with Device::Auto "cpu (CUDA failed: why)".
     std::string device = "cpu";
     /// With CUDA: the device's stages (upload, bounds, sort, cells, classify, band, isolated,
     /// gather, download, completion gather; gather-full: upload, gather, download), GPU time from
-    /// CUDA events, inside the host stages above and not in totalSeconds.
+    /// CUDA events, inside the host stages of the timing tree.
     std::vector<StageTime> gpuStages;
     size_t gpuBytes = 0; ///< peak device memory the CUDA stages held
 };
@@ -62,14 +63,15 @@ struct RasterizeResult
 void prepareDevice(Device device);
 
 /// Particle radii: with params.perParticleRadii and a radius attribute (pscale), r_j comes from
-/// it; otherwise r_j = params.radius. sourceName goes into the grid metadata.
-/// ValueError for invalid parameters or an input that cannot be gridded.
-RasterizeResult rasterizeParticles(const ParticleSet& particles, const Params& params,
+/// it; otherwise r_j = params.radius. sourceName goes into the grid metadata. Stages are timed in
+/// ctx.timing() under "rasterize". ValueError for invalid parameters or an input that cannot be
+/// gridded; Cancelled when ctx's callback stopped it.
+RasterizeResult rasterizeParticles(const ParticleSet& particles, const Params& params, Context& ctx,
                                    const std::string& sourceName = "");
 
-/// Write grids to a .vdb (Blosc), atomically (temporary file + rename). The file's UUID is
-/// derived from its content, so equal grids give byte-identical files. OutputError on failure.
-void writeLevelSet(const openvdb::GridPtrVec& grids, const std::string& path);
+/// The same with a context of its own: CPU, all cores, no callback.
+RasterizeResult rasterizeParticles(const ParticleSet& particles, const Params& params,
+                                   const std::string& sourceName = "");
 
 /// The metadata names fluidsurf writes, e.g. "fluidsurf:particle_radius".
 std::vector<std::string> levelSetMetadataNames();

@@ -4,8 +4,9 @@
 // the rounding here changes the band's topology.
 #pragma once
 
-#include "field/FieldMath.h" // FLUIDSURF_HD
+#include "util/HostDevice.h"
 
+#include <math.h>
 #include <stdint.h>
 
 namespace fluidsurf {

@@ -49,7 +49,8 @@ ClassRule classRule(const Params& params)
     return r;
 }
 
-Classification classifyParticles(const neighbors::CellIndex& index, const Params& params)
+Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
+                                 Context& ctx)
 {
     const size_t n = index.size();
     Classification out;
@@ -65,6 +66,7 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, index.cellCount(), 16),
         [&](const tbb::blocked_range<size_t>& cells) {
+            ctx.checkpoint();
             Neighbourhood nb;
             for (size_t c = cells.begin(); c != cells.end(); ++c) {
                 const uint32_t b = index.starts[c], e = index.starts[c + 1];

@@ -57,9 +57,11 @@ KernelConstants kernelConstants(const Params& params);
 /// The class rule's constants and thresholds from the parameters.
 ClassRule classRule(const Params& params);
 
-/// Parallel over occupied cells; each cell gathers its neighbourhood once.
+/// Parallel over occupied cells (ctx.checkpoint() per range); each cell gathers its
+/// neighbourhood once.
 /// uniformRadius is used when the index has no per-particle radii.
-Classification classifyParticles(const neighbors::CellIndex& index, const Params& params);
+Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
+                                 Context& ctx);
 
 } // namespace classify
 } // namespace fluidsurf

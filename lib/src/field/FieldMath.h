@@ -4,13 +4,9 @@
 // formula; no OpenVDB, no Params here.
 #pragma once
 
-#include <math.h>
+#include "util/HostDevice.h"
 
-#ifdef __CUDACC__
-#define FLUIDSURF_HD __host__ __device__
-#else
-#define FLUIDSURF_HD
-#endif
+#include <math.h>
 
 namespace fluidsurf {
 namespace field {

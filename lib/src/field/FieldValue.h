@@ -16,6 +16,7 @@
 #include "field/FieldMath.h"
 #include "util/Lanes.h"
 
+#include <fluidsurf/Level.h>
 #include <fluidsurf/Params.h>
 
 #include <algorithm>
@@ -75,7 +76,7 @@ template <typename T> FieldSums toFieldSums(const PartialSums<T>& a)
 }
 
 /// FieldMath's constants from the parameters.
-inline FieldConstants fieldConstants(const Params& p, bool perParticleRadii)
+inline FieldConstants fieldConstants(const Params& p, const Level& level, bool perParticleRadii)
 {
     FieldConstants c;
     c.influenceRadius = p.influenceRadius;
@@ -84,7 +85,7 @@ inline FieldConstants fieldConstants(const Params& p, bool perParticleRadii)
     c.ssp07 = p.field == FieldKind::Ssp07;
     c.tLow = p.tLow;
     c.tHigh = p.tHigh;
-    c.background = float(p.background());
+    c.background = float(p.background(level));
     return c;
 }
 

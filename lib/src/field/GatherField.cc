@@ -213,14 +213,14 @@ struct Kernel
 } // namespace
 
 size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
-                     const Params& params)
+                     const Params& params, const Level& level, Context& ctx)
 {
     const bool radii = !particles.radii.empty();
-    const int reach = int(std::ceil(params.influenceRadius / params.voxelSize));
+    const int reach = int(std::ceil(params.influenceRadius / level.voxelSize));
     const int slabs = int(LeafT::DIM) + 2 * reach;
     Kernel kernel{particles,
-                  fieldConstants(params, radii),
-                  params.voxelSize,
+                  fieldConstants(params, level, radii),
+                  level.voxelSize,
                   params.influenceRadius,
                   reach,
                   radii,
@@ -229,6 +229,7 @@ size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& parti
     std::atomic<size_t> evaluations{0};
     tbb::parallel_for(leaves.leafRange(1),
                       [&](const openvdb::tree::LeafManager<openvdb::FloatTree>::LeafRange& range) {
+                          ctx.checkpoint();
                           Scratch scratch;
                           size_t n = 0;
                           for (auto leaf = range.begin(); leaf; ++leaf)

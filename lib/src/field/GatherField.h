@@ -13,6 +13,8 @@
 
 #include "neighbors/CellIndex.h"
 
+#include <fluidsurf/Context.h>
+#include <fluidsurf/Level.h>
 #include <fluidsurf/Params.h>
 
 #include <openvdb/openvdb.h>
@@ -22,10 +24,11 @@
 namespace fluidsurf {
 namespace field {
 
-/// Fill every active voxel of tree (voxel (i,j,k) at (i,j,k) * voxelSize) with phi, clamped to
-/// +-background. Inactive voxels are left alone. Returns the number of field evaluations.
+/// Fill every active voxel of tree (voxel (i,j,k) at (i,j,k) * level.voxelSize) with phi (one
+/// ctx.checkpoint() per leaf range), clamped to +-background. Inactive voxels are left alone.
+/// Returns the number of field evaluations.
 size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
-                     const Params& params);
+                     const Params& params, const Level& level, Context& ctx);
 
 } // namespace field
 } // namespace fluidsurf

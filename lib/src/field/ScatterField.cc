@@ -14,12 +14,13 @@ namespace {
 /// Every particle adds itself to every vertex within R of it, in particle order.
 template <bool Ssp07, bool Radii>
 void scatter(const neighbors::CellIndex& particles, const openvdb::CoordBBox& box, double dx,
-             double R, std::vector<PartialSums<float>>& acc)
+             double R, std::vector<PartialSums<float>>& acc, Context& ctx)
 {
     const openvdb::Coord lo = box.min(), dim = box.dim();
     const size_t ny = dim.y(), nz = dim.z();
     const float invR2 = float(1 / (R * R));
     for (size_t p = 0; p < particles.size(); ++p) {
+        if (p % 4096 == 0) ctx.checkpoint();
         const Vec3f& x = particles.positions[p];
         int a0[3], a1[3];
         for (int a = 0; a < 3; ++a) {
@@ -44,24 +45,24 @@ void scatter(const neighbors::CellIndex& particles, const openvdb::CoordBBox& bo
 } // namespace
 
 openvdb::FloatTree::Ptr scatterField(const neighbors::CellIndex& particles, const Params& params,
-                                     size_t* evaluations)
+                                     const Level& level, Context& ctx, size_t* evaluations)
 {
     const bool radii = !particles.radii.empty();
-    const FieldConstants constants = fieldConstants(params, radii);
+    const FieldConstants constants = fieldConstants(params, level, radii);
     auto tree = std::make_shared<openvdb::FloatTree>(constants.background);
-    const openvdb::CoordBBox box = narrowband::boundingVolume(particles, params);
+    const openvdb::CoordBBox box = narrowband::boundingVolume(particles, params, level);
     if (box.empty()) return tree;
     narrowband::checkDenseMemory(box, sizeof(PartialSums<float>), "the scatter baseline");
     const openvdb::Coord lo = box.min(), dim = box.dim();
     const size_t nx = dim.x(), ny = dim.y(), nz = dim.z();
     std::vector<PartialSums<float>> acc(nx * ny * nz);
-    const double dx = params.voxelSize, R = params.influenceRadius;
+    const double dx = level.voxelSize, R = params.influenceRadius;
     if (constants.ssp07)
-        radii ? scatter<true, true>(particles, box, dx, R, acc)
-              : scatter<true, false>(particles, box, dx, R, acc);
+        radii ? scatter<true, true>(particles, box, dx, R, acc, ctx)
+              : scatter<true, false>(particles, box, dx, R, acc, ctx);
     else
-        radii ? scatter<false, true>(particles, box, dx, R, acc)
-              : scatter<false, false>(particles, box, dx, R, acc);
+        radii ? scatter<false, true>(particles, box, dx, R, acc, ctx)
+              : scatter<false, false>(particles, box, dx, R, acc, ctx);
 
     openvdb::tree::ValueAccessor<openvdb::FloatTree> out(*tree);
     for (size_t i = 0; i < nx; ++i)

@@ -6,6 +6,8 @@
 
 #include "neighbors/CellIndex.h"
 
+#include <fluidsurf/Context.h>
+#include <fluidsurf/Level.h>
 #include <fluidsurf/Params.h>
 
 #include <openvdb/openvdb.h>
@@ -14,8 +16,10 @@ namespace fluidsurf {
 namespace field {
 
 /// A tree whose active voxels are the vertices of the bounding volume with |phi| < background.
-/// ValueError (before allocating) when the dense arrays would not fit in memory.
+/// ValueError (before allocating) when the dense arrays would not fit in memory. Serial: one
+/// ctx.checkpoint() per 4096 particles.
 openvdb::FloatTree::Ptr scatterField(const neighbors::CellIndex& particles, const Params& params,
+                                     const Level& level, Context& ctx,
                                      size_t* evaluations = nullptr);
 
 } // namespace field

@@ -1,7 +1,9 @@
 // LevelSet.h - the last stage: field values on a tree -> a proper OpenVDB level set grid
-// (sign flood fill, pruning, class, name, transform, metadata), and its deterministic file.
+// (sign flood fill, pruning, class, name, the level's transform, metadata). Writing it is
+// io/LevelSetIO.h's work.
 #pragma once
 
+#include <fluidsurf/Level.h>
 #include <fluidsurf/Params.h>
 
 #include <openvdb/openvdb.h>
@@ -21,7 +23,7 @@ struct GridInfo
 /// keepOnlyBand, voxels whose |phi| reached the background are deactivated first (the
 /// volume methods activate every vertex; the narrow band keeps its band).
 openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Params& params,
-                                       bool keepOnlyBand, const GridInfo& info);
+                                       const Level& level, bool keepOnlyBand, const GridInfo& info);
 
 } // namespace levelset
 } // namespace fluidsurf

@@ -117,6 +117,7 @@ struct Passes
     Affine affine;
     IndexTree& index;
     openvdb::tree::LeafManager<IndexTree>& leaves;
+    Context& ctx;
     std::vector<uint64_t> first; // per leaf: number of its first vertex (after pass 1)
 
     std::vector<LeafBits> bits; // per leaf (pass 0)
@@ -166,6 +167,7 @@ struct Passes
             position[&leaves.leaf(i)] = i;
         tbb::parallel_for(leaves.leafRange(),
                           [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
+                              ctx.checkpoint();
                               for (auto leaf = range.begin(); leaf; ++leaf)
                                   bits[leaf.pos()] = LeafBits(valueLeaf(*leaf));
                           });
@@ -177,6 +179,7 @@ struct Passes
         std::vector<uint64_t> counts(leaves.leafCount(), 0);
         tbb::parallel_for(
             leaves.leafRange(), [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
+                ctx.checkpoint();
                 for (auto leaf = range.begin(); leaf; ++leaf) {
                     const LeafBits &here = bits[leaf.pos()], &nx = next(*leaf, 0),
                                    &ny = next(*leaf, 1), &nz = next(*leaf, 2);
@@ -214,6 +217,7 @@ struct Passes
         mesh.normals.resize(first.back());
         tbb::parallel_for(
             leaves.leafRange(), [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
+                ctx.checkpoint();
                 FloatAccessor acc(tree);
                 for (auto leaf = range.begin(); leaf; ++leaf) {
                     const FloatLeaf& values = valueLeaf(*leaf);
@@ -270,6 +274,7 @@ struct Passes
         std::atomic<size_t> surfaceCells{0};
         tbb::parallel_for(
             leaves.leafRange(), [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
+                ctx.checkpoint();
                 FloatAccessor acc(tree);
                 openvdb::tree::ValueAccessor<const IndexTree> idx(index);
                 size_t cells = 0;
@@ -454,7 +459,7 @@ void dropUnusedVertices(TriangleMesh& mesh)
 
 } // namespace
 
-TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, size_t* surfaceCells)
+TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t* surfaceCells)
 {
     // Active tiles (rare in level sets) become voxels so that every active value is a leaf voxel.
     openvdb::FloatTree::Ptr voxelized;
@@ -466,7 +471,7 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, size_t* surfaceCells)
     }
     IndexTree index(*tree, int64_t(0), openvdb::TopologyCopy());
     openvdb::tree::LeafManager<IndexTree> leaves(index);
-    Passes passes{*tree, Affine(grid.transform()), index, leaves, {}, {}, {}};
+    Passes passes{*tree, Affine(grid.transform()), index, leaves, ctx, {}, {}, {}};
     TriangleMesh mesh;
     passes.readBits();
     passes.markEdges();

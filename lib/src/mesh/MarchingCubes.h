@@ -10,7 +10,8 @@
 //  3. triangles: every cell whose 8 corners are active and whose signs differ. Its polygons are
 //     traced from face segments (ambiguous faces by the bilinear saddle value) and fanned (around
 //     a centre vertex in cells with an ambiguous face).
-// Vertices no complete cell uses (edges at the band's rim) are dropped at the end.
+// Vertices no complete cell uses (edges at the band's rim) are dropped at the end. Each pass
+// calls ctx.checkpoint() once per leaf range.
 #pragma once
 
 #include <fluidsurf/MeshLevelSet.h>
@@ -19,7 +20,8 @@ namespace fluidsurf {
 namespace mesh {
 
 /// surfaceCells (optional): the number of cells with a sign change that were triangulated.
-TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, size_t* surfaceCells = nullptr);
+TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx,
+                           size_t* surfaceCells = nullptr);
 
 } // namespace mesh
 } // namespace fluidsurf

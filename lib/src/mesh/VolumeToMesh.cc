@@ -11,7 +11,7 @@
 namespace fluidsurf {
 namespace mesh {
 
-TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid)
+TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid, Context& ctx)
 {
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
@@ -24,6 +24,7 @@ TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid)
     const openvdb::math::Transform& xform = grid.transform();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 1024),
                       [&](const tbb::blocked_range<size_t>& r) {
+                          ctx.checkpoint();
                           FloatAccessor acc(grid.tree());
                           for (size_t i = r.begin(); i != r.end(); ++i) {
                               const openvdb::Vec3s& p = points[i];

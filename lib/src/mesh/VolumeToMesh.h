@@ -7,7 +7,8 @@
 namespace fluidsurf {
 namespace mesh {
 
-TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid);
+/// volumeToMesh itself has no interrupter: ctx.checkpoint() runs only in the normals pass.
+TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid, Context& ctx);
 
 } // namespace mesh
 } // namespace fluidsurf

@@ -15,9 +15,9 @@
 namespace fluidsurf {
 namespace narrowband {
 
-double effectiveBandWidth(const Params& params, double maxRadius)
+double effectiveBandWidth(const Params& params, const Level& level, double maxRadius)
 {
-    return std::max(params.bandWidth, maxRadius + params.voxelSize);
+    return std::max(params.bandWidth, maxRadius + level.voxelSize);
 }
 
 namespace {
@@ -26,19 +26,22 @@ struct BandBuilder
     const neighbors::CellIndex& particles;
     const std::vector<uint32_t>& seeds;
     double width, invDx;
+    Context& ctx;
     openvdb::MaskTree::Ptr tree{new openvdb::MaskTree(false)};
 
-    BandBuilder(const neighbors::CellIndex& p, const std::vector<uint32_t>& s, double w, double inv)
-        : particles(p), seeds(s), width(w), invDx(inv)
+    BandBuilder(const neighbors::CellIndex& p, const std::vector<uint32_t>& s, double w, double inv,
+                Context& c)
+        : particles(p), seeds(s), width(w), invDx(inv), ctx(c)
     {
     }
     BandBuilder(BandBuilder& o, tbb::split)
-        : particles(o.particles), seeds(o.seeds), width(o.width), invDx(o.invDx)
+        : particles(o.particles), seeds(o.seeds), width(o.width), invDx(o.invDx), ctx(o.ctx)
     {
     }
 
     void operator()(const tbb::blocked_range<size_t>& r)
     {
+        ctx.checkpoint();
         openvdb::tree::ValueAccessor<openvdb::MaskTree> acc(*tree);
         for (size_t s = r.begin(); s != r.end(); ++s) {
             const Vec3f& p = particles.positions[seeds[s]];
@@ -62,25 +65,27 @@ struct BandBuilder
 
 openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
                                        const classify::Classification& classes,
-                                       const Params& params, double width)
+                                       const Params& params, const Level& level, double width,
+                                       Context& ctx)
 {
     std::vector<uint32_t> seeds;
     for (size_t i = 0; i < classes.classes.size(); ++i)
         if (classify::isSurface(classes.classes[i]) ||
             (params.keepIsolated && classes.classes[i] == classify::Isolated))
             seeds.push_back(uint32_t(i));
-    BandBuilder builder(particles, seeds, width, 1 / params.voxelSize);
+    BandBuilder builder(particles, seeds, width, 1 / level.voxelSize, ctx);
     tbb::parallel_reduce(tbb::blocked_range<size_t>(0, seeds.size(), 256), builder);
     return builder.tree;
 }
 
-openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const Params& params)
+openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const Params& params,
+                                  const Level& level)
 {
     if (particles.size() == 0) return openvdb::CoordBBox(); // empty
     BBox3f box;
     for (const Vec3f& p : particles.positions)
         box.expand(p);
-    const double inv = 1 / params.voxelSize, R = params.influenceRadius;
+    const double inv = 1 / level.voxelSize, R = params.influenceRadius;
     openvdb::Coord lo, hi;
     for (int a = 0; a < 3; ++a) {
         lo[a] = int(std::floor((box.min[a] - R) * inv));

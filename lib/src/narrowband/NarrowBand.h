@@ -1,9 +1,9 @@
 // NarrowBand.h - which grid vertices get a field value (thesis §4.2.2, "Extracting surface
 // vertices"): every vertex within +-w per axis of a surface particle, as VDB topology.
 //
-// w = max(bandWidth, r_max + voxelSize). The field's zero crossing lies at most ~r beyond the
-// outer particle centres, and a Marching Cubes cell it crosses has corners up to one voxel
-// further: r + dx covers them. At the default voxel r this is the thesis' 2r; at voxel 2r the
+// w = max(bandWidth, r_max + dx), dx the level's voxel size. The field's zero crossing lies at most
+// ~r beyond the outer particle centres, and a Marching Cubes cell it crosses has corners up to one
+// voxel further: r + dx covers them. At the default voxel r this is the thesis' 2r; at voxel 2r the
 // thesis' band would leave gaps in the cells the surface crosses.
 //
 // Also the topology of the baselines: every vertex of the bounding volume (particles +- R).
@@ -12,6 +12,8 @@
 #include "classify/Classify.h"
 #include "neighbors/CellIndex.h"
 
+#include <fluidsurf/Context.h>
+#include <fluidsurf/Level.h>
 #include <fluidsurf/Params.h>
 
 #include <openvdb/openvdb.h>
@@ -20,16 +22,19 @@ namespace fluidsurf {
 namespace narrowband {
 
 /// The half width w used for particles of radius up to maxRadius.
-double effectiveBandWidth(const Params& params, double maxRadius);
+double effectiveBandWidth(const Params& params, const Level& level, double maxRadius);
 
 /// Active voxels within +-width of the surface and splash particles, and of isolated ones with
-/// params.keepIsolated (parallel, deterministic). width comes from effectiveBandWidth.
+/// params.keepIsolated (parallel, deterministic; ctx.checkpoint() per range). width comes from
+/// effectiveBandWidth.
 openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
                                        const classify::Classification& classes,
-                                       const Params& params, double width);
+                                       const Params& params, const Level& level, double width,
+                                       Context& ctx);
 
 /// Index box of every vertex within R of the particles' bounding box (the "bounding volume").
-openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const Params& params);
+openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const Params& params,
+                                  const Level& level);
 
 /// Estimated bytes of a dense grid over the bounding volume with bytesPerVertex each; throws
 /// ValueError naming the estimate when it exceeds the machine's physical memory.

@@ -100,7 +100,8 @@ void cellGrid(const BBox3f& box, double cellSize, double origin[3], uint32_t dim
     }
 }
 
-CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, double cellSize)
+CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, double cellSize,
+                         Context& ctx)
 {
     if (n >= (size_t(1) << 32) - 1) throw ValueError("more than 2^32 - 2 particles in one frame");
     if (!(cellSize > 0)) throw ValueError("cell size must be positive");
@@ -117,6 +118,7 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
     std::vector<Handle> handles(n);
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+            ctx.checkpoint();
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 uint32_t c[3];
                 for (int a = 0; a < 3; ++a) {
@@ -134,6 +136,7 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
     if (radii) index.radii.resize(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096),
                       [&](const tbb::blocked_range<size_t>& r) {
+                          ctx.checkpoint();
                           for (size_t i = r.begin(); i != r.end(); ++i) {
                               const uint32_t src = handles[i].index;
                               index.order[i] = src;

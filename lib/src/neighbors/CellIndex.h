@@ -10,6 +10,7 @@
 // close in space close in memory.
 #pragma once
 
+#include <fluidsurf/Context.h>
 #include <fluidsurf/Vec3.h>
 
 #include <cstdint>
@@ -79,9 +80,11 @@ struct CellIndex
 /// more than kMaxCellsPerAxis cells. Shared by the CPU index and the CUDA pipeline.
 void cellGrid(const BBox3f& box, double cellSize, double origin[3], uint32_t dims[3]);
 
-/// Sort n particles into cells of the given size (parallel). radii may be null (uniform).
+/// Sort n particles into cells of the given size (parallel; ctx.checkpoint() per range). radii
+/// may be null (uniform).
 /// ValueError when the particles span more than kMaxCellsPerAxis cells along an axis.
-CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, double cellSize);
+CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, double cellSize,
+                         Context& ctx);
 
 /// The same index restricted to the particles whose keep flag (in cell order) is non-zero;
 /// order and cells stay sorted, so no re-sort is needed.

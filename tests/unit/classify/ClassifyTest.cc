@@ -13,8 +13,10 @@ namespace {
 classify::Classification classifyScene(const ParticleSet& ps, const Params& p,
                                        neighbors::CellIndex& index)
 {
-    index = neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength);
-    return classify::classifyParticles(index, p);
+    Context ctx;
+    index =
+        neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength, ctx);
+    return classify::classifyParticles(index, p, ctx);
 }
 } // namespace
 

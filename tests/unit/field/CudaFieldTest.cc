@@ -21,10 +21,9 @@ namespace {
 void expectSameField(const ParticleSet& ps, Params p, const std::string& what,
                      bool devicePipeline = true)
 {
-    p.device = Device::Cpu;
-    const RasterizeResult cpu = rasterizeParticles(ps, p, what);
-    p.device = Device::Cuda;
-    const RasterizeResult gpu = rasterizeParticles(ps, p, what);
+    Context onCpu(Device::Cpu), onGpu(Device::Cuda);
+    const RasterizeResult cpu = rasterizeParticles(ps, p, onCpu, what);
+    const RasterizeResult gpu = rasterizeParticles(ps, p, onGpu, what);
     EXPECT_NE(gpu.stats.device, "cpu") << what;
     // The narrow band must have run on the device from the sort on, not only its gather.
     bool deviceClassify = false;
@@ -133,7 +132,7 @@ TEST(FieldCuda, MatchesCpuOnSparseAndDegenerateFrames)
 TEST(FieldCuda, FarFromTheOriginTheCpuBandIsUsed)
 {
     // Leaf keys on the device hold 2^20 leaves (8.4M voxels) either side of the origin. Beyond,
-    // the CPU builds the band and the GPU only gathers; the grid must not change. Spacing 2 at
+    // the CPU takes the frame and says so; the grid must not change. Spacing 2 at
     // x = 9e6 is still exact in float.
     FLUIDSURF_REQUIRE_GPU();
     ParticleSet ps;
@@ -142,29 +141,30 @@ TEST(FieldCuda, FarFromTheOriginTheCpuBandIsUsed)
             for (int k = 0; k < 12; ++k)
                 ps.positions.push_back(Vec3f(9e6f + 2.f * i, 2.f * j, 2.f * k));
     expectSameField(ps, Params::fromRadius(1.0), "far_block", false);
+    Context onGpu(Device::Cuda);
+    EXPECT_EQ(rasterizeParticles(ps, Params::fromRadius(1.0), onGpu).stats.device.rfind("cpu (", 0),
+              0u);
 }
 
 TEST(FieldCuda, RequestWithoutGpuFailsClearly)
 {
     std::string why;
-    if (field::cudaUsable(&why)) GTEST_SKIP() << "a GPU is present: this checks the no-GPU path";
+    if (backend::cudaUsable(&why)) GTEST_SKIP() << "a GPU is present: this checks the no-GPU path";
     SceneParams sp;
     sp.count = 1000;
     const ParticleSet ps = generateScene(Scene::Block, sp);
-    Params p = Params::fromRadius(sp.radius);
-    p.device = Device::Cuda;
+    const Params p = Params::fromRadius(sp.radius);
+    Context cuda(Device::Cuda), automatic(Device::Auto), cpu(Device::Cpu);
     try {
-        rasterizeParticles(ps, p);
+        rasterizeParticles(ps, p, cuda);
         ADD_FAILURE() << "no error";
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("CUDA"), std::string::npos) << e.what();
     }
     // Auto falls back to the CPU: the same grid as an explicit CPU run.
-    p.device = Device::Auto;
-    const RasterizeResult autoRun = rasterizeParticles(ps, p);
+    const RasterizeResult autoRun = rasterizeParticles(ps, p, automatic);
     EXPECT_EQ(autoRun.stats.device, "cpu");
-    p.device = Device::Cpu;
-    const RasterizeResult cpuRun = rasterizeParticles(ps, p);
+    const RasterizeResult cpuRun = rasterizeParticles(ps, p, cpu);
     EXPECT_TRUE(autoRun.grid->tree().hasSameTopology(cpuRun.grid->tree()));
     EXPECT_THROW(deviceFromName("gpu"), ValueError);
 }

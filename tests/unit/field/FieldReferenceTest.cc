@@ -131,8 +131,8 @@ static void realFramesMatchBruteForce(Device device)
     for (const test::RealFrame& f : kRealFrames) {
         const ParticleSet ps = io::readParticles(sharedData() + "/real/" + f.name);
         Params p = Params::fromRadius(f.radius);
-        p.device = device;
-        const RasterizeResult res = rasterizeParticles(ps, p, f.name);
+        Context ctx(device);
+        const RasterizeResult res = rasterizeParticles(ps, p, ctx, f.name);
         expectMatchesReference(*res.grid, Reference(ps, p), p, f.name);
         // Only the 20 x 20 grid at 15 r spacing is all isolated (no grid at all).
         EXPECT_EQ(res.grid->activeVoxelCount() == 0, res.stats.isolated == ps.size()) << f.name;
@@ -206,8 +206,8 @@ static void otherVoxelSizesAndSupports(Device device)
             Params p = Params::fromRadius(sp.radius);
             p.voxelSize = voxel * sp.radius;
             p.influenceRadius = support * sp.radius;
-            p.device = device;
-            const RasterizeResult res = rasterizeParticles(ps, p);
+            Context ctx(device);
+            const RasterizeResult res = rasterizeParticles(ps, p, ctx);
             const std::string what =
                 "voxel " + std::to_string(voxel) + "r R " + std::to_string(support) + "r";
             expectMatchesReference(*res.grid, Reference(ps, p), p, what, 20000);
@@ -236,8 +236,8 @@ static void singleParticleIsASphere(Device device)
     ps.positions[0] = Vec3f(0.0137f, -0.271f, 1.5f); // off the grid
     Params p = Params::fromRadius(sp.radius);
     p.keepIsolated = true;
-    p.device = device;
-    const RasterizeResult res = rasterizeParticles(ps, p);
+    Context ctx(device);
+    const RasterizeResult res = rasterizeParticles(ps, p, ctx);
     EXPECT_GE(res.grid->activeVoxelCount(), 64u); // +-2r around it at voxel r
     const Vec3f c = ps.positions[0];
     size_t n = 0;

@@ -3,6 +3,7 @@
 
 #include <fluidsurf/Rasterize.h>
 #include <fluidsurf/Scenes.h>
+#include <fluidsurf/io/LevelSetIO.h>
 
 #include <tbb/global_control.h>
 
@@ -108,7 +109,7 @@ TEST(Methods, OutputIsByteIdenticalWithOneAndTwoThreads)
     for (int threads : {1, 2}) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
         const RasterizeResult res = run(ps, FieldMethod::NarrowBand);
-        writeLevelSet({res.grid}, dir.path(std::to_string(threads) + ".vdb"));
+        io::writeLevelSet({res.grid}, dir.path(std::to_string(threads) + ".vdb"));
     }
     const std::string one = readFileBytes(dir.path("1.vdb")),
                       two = readFileBytes(dir.path("2.vdb"));

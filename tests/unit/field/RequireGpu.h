@@ -1,7 +1,7 @@
 // RequireGpu.h - skip a CUDA test, with the reason, where there is no usable GPU (CI).
 #pragma once
 
-#include "field/CudaField.h"
+#include "backend/Backend.h"
 
 #include <gtest/gtest.h>
 
@@ -10,5 +10,5 @@
 #define FLUIDSURF_REQUIRE_GPU()                                                                    \
     do {                                                                                           \
         std::string why;                                                                           \
-        if (!fluidsurf::field::cudaUsable(&why)) GTEST_SKIP() << "no usable GPU: " << why;         \
+        if (!fluidsurf::backend::cudaUsable(&why)) GTEST_SKIP() << "no usable GPU: " << why;       \
     } while (0)

@@ -4,6 +4,7 @@
 
 #include <fluidsurf/Rasterize.h>
 #include <fluidsurf/Scenes.h>
+#include <fluidsurf/io/LevelSetIO.h>
 
 #include <openvdb/openvdb.h>
 
@@ -19,7 +20,7 @@ TEST(LevelSet, FileIsAnOpenVdbLevelSetWithMetadata)
     p.voxelSize = 0.5 * sp.radius;
     const RasterizeResult res = rasterizeParticles(ps, p, "block.bgeo");
     TempDir dir;
-    writeLevelSet({res.grid}, dir.path("block.vdb"));
+    io::writeLevelSet({res.grid}, dir.path("block.vdb"));
 
     openvdb::io::File file(dir.path("block.vdb"));
     file.open();
@@ -60,7 +61,7 @@ TEST(LevelSet, WriteFailureLeavesNothing)
     sp.count = 1000;
     const RasterizeResult res =
         rasterizeParticles(generateScene(Scene::Block, sp), Params::fromRadius(sp.radius));
-    EXPECT_THROW(writeLevelSet({res.grid}, "/nonexistent-folder/x.vdb"), OutputError);
+    EXPECT_THROW(io::writeLevelSet({res.grid}, "/nonexistent-folder/x.vdb"), OutputError);
 }
 
 TEST(LevelSet, InvalidParametersAreRejected)

@@ -10,6 +10,7 @@
 #include <fluidsurf/MeshLevelSet.h>
 #include <fluidsurf/Rasterize.h>
 #include <fluidsurf/Scenes.h>
+#include <fluidsurf/io/LevelSetIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
 #include <openvdb/tools/LevelSetSphere.h>
@@ -211,8 +212,8 @@ static void realFramesAreWatertight(Device device)
     for (const test::RealFrame& f : test::kRealFrames) {
         const ParticleSet ps = io::readParticles(test::sharedData() + "/real/" + f.name);
         Params p = Params::fromRadius(f.radius);
-        p.device = device;
-        const RasterizeResult res = rasterizeParticles(ps, p, f.name);
+        Context ctx(device);
+        const RasterizeResult res = rasterizeParticles(ps, p, ctx, f.name);
         Agreement bound;
         bound.area = 0.02, bound.toOpenVdb = 0.75, bound.fromOpenVdb = 0.6;
         if (!f.fluid || ps.size() < 1000)
@@ -280,21 +281,21 @@ TEST(MarchingCubes, ReadsLevelSetFiles)
     sp.count = 2000;
     const RasterizeResult res =
         rasterizeParticles(generateScene(Scene::Ball, sp), Params::fromRadius(sp.radius));
-    writeLevelSet({res.grid}, dir.path("ball.vdb"));
-    const openvdb::FloatGrid::Ptr back = readLevelSet(dir.path("ball.vdb"));
+    io::writeLevelSet({res.grid}, dir.path("ball.vdb"));
+    const openvdb::FloatGrid::Ptr back = io::readLevelSet(dir.path("ball.vdb"));
     EXPECT_EQ(back->getName(), "surface");
     EXPECT_TRUE(meshLevelSet(*back).triangles == meshLevelSet(*res.grid).triangles);
-    EXPECT_NO_THROW(readLevelSet(dir.path("ball.vdb"), "surface"));
+    EXPECT_NO_THROW(io::readLevelSet(dir.path("ball.vdb"), "surface"));
     try {
-        readLevelSet(dir.path("ball.vdb"), "density");
+        io::readLevelSet(dir.path("ball.vdb"), "density");
         ADD_FAILURE() << "no error";
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("surface (float, level set)"), std::string::npos)
             << e.what();
     }
     test::writeFile(dir.path("bad.vdb"), "not a vdb at all");
-    EXPECT_THROW(readLevelSet(dir.path("bad.vdb")), InputError);
-    EXPECT_THROW(readLevelSet(dir.path("missing.vdb")), InputError);
+    EXPECT_THROW(io::readLevelSet(dir.path("bad.vdb")), InputError);
+    EXPECT_THROW(io::readLevelSet(dir.path("missing.vdb")), InputError);
     EXPECT_THROW(mesherFromName("dual"), ValueError);
 }
 

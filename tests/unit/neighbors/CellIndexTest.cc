@@ -38,7 +38,8 @@ TEST(CellIndex, EveryParticleIsInItsCellAndFound)
     }
     pts.emplace_back(1000.f, 0.f, -7.f); // far away: sparse, not a dense box
     const double cell = 0.1;
-    const CellIndex index = buildCellIndex(pts.data(), nullptr, pts.size(), cell);
+    Context ctx;
+    const CellIndex index = buildCellIndex(pts.data(), nullptr, pts.size(), cell, ctx);
     ASSERT_EQ(index.size(), pts.size());
     EXPECT_LT(index.cellCount(), pts.size() + 1);
     std::set<uint32_t> seen(index.order.begin(), index.order.end());
@@ -76,5 +77,6 @@ TEST(CellIndex, EveryParticleIsInItsCellAndFound)
 TEST(CellIndex, RejectsSpansBeyondTheKey)
 {
     std::vector<Vec3f> pts{{0, 0, 0}, {0, 3e6f, 0}};
-    EXPECT_THROW(buildCellIndex(pts.data(), nullptr, pts.size(), 1.0), ValueError);
+    Context ctx;
+    EXPECT_THROW(buildCellIndex(pts.data(), nullptr, pts.size(), 1.0, ctx), ValueError);
 }

@@ -1,6 +1,6 @@
-// MeshIO.h - write triangle meshes: Wavefront OBJ (v, vn, f v//vn), binary little-endian PLY
-// (x y z [nx ny nz] + vertex_indices), legacy VTK POLYDATA (binary). Chosen by extension;
-// written atomically.
+// MeshIO.h - write triangle meshes (and read OBJ and PLY back): Wavefront OBJ (v, vn, f v//vn),
+// binary little-endian PLY (x y z [nx ny nz] + vertex_indices), legacy VTK POLYDATA (binary).
+// Chosen by extension; written atomically.
 #pragma once
 
 #include <fluidsurf/Mesh.h>
@@ -16,6 +16,10 @@ MeshFormat meshFormatFromPath(const std::string& path);
 
 /// OutputError for an unknown extension, indices out of range or a failed write.
 void writeMesh(const TriangleMesh& mesh, const std::string& path);
+
+/// Read an OBJ or PLY mesh (polygons fanned into triangles; normals kept when there is one per
+/// vertex). InputError naming the file, the problem and where (line or byte).
+TriangleMesh readMesh(const std::string& path);
 
 } // namespace io
 } // namespace fluidsurf

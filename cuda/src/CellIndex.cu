@@ -1,4 +1,4 @@
-// SortCells.cu - the neighbour structure on the device (thesis §4.2.1-4.2.2): Morton keys of the
+// CellIndex.cu - the neighbour structure on the device (thesis §4.2.1-4.2.2): Morton keys of the
 // particles' cells, a stable radix sort (CUB), the occupied cells' ranges and a hash table of
 // their keys. The arithmetic is the CPU's (neighbors/CellIndex.cc), so keys, order and cells
 // are identical.

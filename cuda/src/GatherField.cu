@@ -1,7 +1,7 @@
-// FieldGather.cu - the SSP07 / ZB05 gather on the GPU, one block per VDB leaf (see
+// GatherField.cu - the SSP07 / ZB05 gather on the GPU, one block per VDB leaf (see
 // fluidsurf/cuda/FieldGather.h). The finish from sums to phi is lib/src/field/FieldMath.h, the
 // same code the CPU runs.
-#include <fluidsurf/cuda/FieldGather.h>
+#include "facade/FieldGather.h"
 
 #include "Stages.cuh"
 

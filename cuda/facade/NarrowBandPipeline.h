@@ -10,8 +10,8 @@
 // for evaluate() (band completion) until the object is destroyed.
 #pragma once
 
+#include "facade/FieldGather.h"
 #include <fluidsurf/Vec3.h>
-#include <fluidsurf/cuda/FieldGather.h>
 
 #include <cstddef>
 #include <cstdint>

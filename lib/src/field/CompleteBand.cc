@@ -1,7 +1,5 @@
 // CompleteBand.cc - grow the band where a zero crossing reaches its edge.
-#include "narrowband/CompleteBand.h"
-
-#include "field/GatherField.h"
+#include "field/CompleteBand.h"
 
 #include <openvdb/tree/LeafManager.h>
 
@@ -11,7 +9,7 @@
 #include <memory>
 
 namespace fluidsurf {
-namespace narrowband {
+namespace field {
 
 namespace {
 constexpr int kMaxRounds = 32;
@@ -25,19 +23,21 @@ struct FrontierFinder
     const openvdb::FloatTree& tree;
     float threshold;
     bool bothEnds; // look for crossings from both ends of each edge (scanning only new voxels)
+    Context& ctx;
     openvdb::MaskTree::Ptr front{new openvdb::MaskTree(false)};
 
-    FrontierFinder(const openvdb::FloatTree& t, float th, bool both)
-        : tree(t), threshold(th), bothEnds(both)
+    FrontierFinder(const openvdb::FloatTree& t, float th, bool both, Context& c)
+        : tree(t), threshold(th), bothEnds(both), ctx(c)
     {
     }
     FrontierFinder(FrontierFinder& o, tbb::split)
-        : tree(o.tree), threshold(o.threshold), bothEnds(o.bothEnds)
+        : tree(o.tree), threshold(o.threshold), bothEnds(o.bothEnds), ctx(o.ctx)
     {
     }
 
     template <typename Range> void operator()(const Range& range)
     {
+        ctx.checkpoint();
         using LeafT = openvdb::FloatTree::LeafNodeType;
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
         openvdb::tree::ValueAccessor<openvdb::MaskTree> out(*front);
@@ -86,23 +86,16 @@ struct FrontierFinder
 };
 } // namespace
 
-size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
-                    const Params& params)
+size_t completeBand(openvdb::FloatTree& tree, const Level& level, const FieldEvaluator& evaluate,
+                    Context& ctx)
 {
-    return completeBand(tree, params, [&](openvdb::FloatTree& grown) {
-        field::evaluateField(grown, particles, params);
-    });
-}
-
-size_t completeBand(openvdb::FloatTree& tree, const Params& params, const FieldEvaluator& evaluate)
-{
-    const float threshold = float(0.5 * params.voxelSize);
+    const float threshold = float(0.5 * level.voxelSize);
     size_t added = 0;
     // The first round scans the whole band; later rounds only the voxels the previous one added
     // (edges are checked from both ends, so a new voxel finds its crossings with old ones).
     openvdb::FloatTree::Ptr lastAdded;
     for (int round = 0; round < kMaxRounds; ++round) {
-        FrontierFinder finder(tree, threshold, lastAdded != nullptr);
+        FrontierFinder finder(tree, threshold, lastAdded != nullptr, ctx);
         {
             openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(lastAdded ? *lastAdded
                                                                                   : tree);
@@ -122,5 +115,5 @@ size_t completeBand(openvdb::FloatTree& tree, const Params& params, const FieldE
     return added;
 }
 
-} // namespace narrowband
+} // namespace field
 } // namespace fluidsurf

@@ -9,28 +9,27 @@
 // block around a voxel with a sign change to an active neighbour (marching cubes triangulates
 // only cells whose 8 corners are active), is activated and evaluated, repeated until nothing is
 // added (a few rounds; the cost is a small fraction of the band).
+// It belongs to the field stage because it evaluates the field: the new voxels are handed to an
+// evaluator, the backend's (the CPU gather or the GPU's), never to a stage's internals.
 #pragma once
 
-#include "neighbors/CellIndex.h"
-
-#include <fluidsurf/Params.h>
+#include <fluidsurf/Context.h>
+#include <fluidsurf/Level.h>
 
 #include <openvdb/openvdb.h>
 
 #include <functional>
 
 namespace fluidsurf {
-namespace narrowband {
+namespace field {
 
-/// Fills every active voxel of a tree with phi (the CPU gather, or the GPU's).
+/// Fills every active voxel of a tree with phi (Backend::evaluate).
 using FieldEvaluator = std::function<void(openvdb::FloatTree&)>;
 
-/// Returns the number of voxels added (and evaluated by evaluate).
-size_t completeBand(openvdb::FloatTree& tree, const Params& params, const FieldEvaluator& evaluate);
+/// Returns the number of voxels added (and evaluated by evaluate). The frontier scan is parallel
+/// over leaf ranges with one ctx.checkpoint() each.
+size_t completeBand(openvdb::FloatTree& tree, const Level& level, const FieldEvaluator& evaluate,
+                    Context& ctx);
 
-/// The same with the CPU gather over particles.
-size_t completeBand(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
-                    const Params& params);
-
-} // namespace narrowband
+} // namespace field
 } // namespace fluidsurf

@@ -1,5 +1,6 @@
-// MarkBand.cu - narrow-band topology on the device (the twin of lib/src/narrowband/NarrowBand.cc):
-// every voxel within +-width per axis of a seed particle, as VDB-style leaf blocks.
+// NarrowBand.cu - narrow-band topology on the device (the twin of
+// lib/src/narrowband/NarrowBand.cc): every voxel within +-width per axis of a seed particle, as
+// VDB-style leaf blocks.
 //
 // Each seed's voxel box touches a few 8^3 leaves. The (seed, leaf) keys are counted, written,
 // radix-sorted and de-duplicated (CUB) into the sorted leaf list; then each seed ORs the part of

@@ -1,0 +1,146 @@
+// Context.h - what every stage receives beside its data (DESIGN.md, "Contexts and levels"):
+// where the field runs (the backend), how many threads, the timing tree, and the progress /
+// cancel callback. One Context serves a whole reconstruction (or a sequence of them); stages
+// never read global flags.
+//
+// Cancelling follows OpenVDB's interrupter pattern: every parallel stage calls checkpoint() once
+// per leaf (or particle) range; when the callback has returned false, each thread stops at its
+// next range and the run throws Cancelled. Nothing is written by a cancelled run (outputs are
+// written through temporary files).
+#pragma once
+
+#include <fluidsurf/Error.h>
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+
+/// Where the field is computed. Cuda runs the narrow band on the first GPU (sort, classify, band,
+/// gather; gather-full only gathers there); Auto picks Cuda when the library was built with CUDA
+/// and a usable GPU is present, else Cpu, and falls back to the CPU (saying why) when CUDA fails.
+enum class Device { Cpu, Cuda, Auto };
+const char* deviceName(Device d);               ///< "cpu", "cuda", "auto"
+Device deviceFromName(const std::string& name); ///< ValueError for unknown names
+
+/// The run was cancelled by the progress callback (or Ctrl-C in the CLI).
+class Cancelled : public Error
+{
+public:
+    explicit Cancelled(const std::string& msg = "cancelled") : Error(msg) {}
+};
+
+/// Nested wall-clock timings: scopes open inside each other on the calling thread.
+class TimingTree
+{
+public:
+    struct Node
+    {
+        std::string name;
+        double seconds = 0;
+        double peakMiB = 0; ///< the process's peak resident memory when the node ended
+        std::vector<size_t> children;
+        size_t parent = 0;
+    };
+
+    /// Measures from construction to destruction into a child of the innermost open scope.
+    class Scope
+    {
+    public:
+        Scope(TimingTree& tree, const std::string& name);
+        ~Scope();
+        Scope(const Scope&) = delete;
+        Scope& operator=(const Scope&) = delete;
+
+    private:
+        TimingTree& mTree;
+        size_t mNode;
+        double mStart;
+    };
+
+    TimingTree();
+    /// Forget every node and restart the root's clock.
+    void clear();
+    /// Add a node measured elsewhere (e.g. a GPU's own events) under the innermost open scope.
+    void add(const std::string& name, double seconds);
+    /// The root's time: from construction or clear() to now (or to the last finish()).
+    void finish();
+
+    const std::vector<Node>& nodes() const { return mNodes; } ///< nodes()[0] is the root
+    const Node& root() const { return mNodes[0]; }
+    /// The innermost open scope's name ("" outside every scope).
+    const std::string& current() const { return mNodes[mOpen].name; }
+    /// Seconds of the first node named name (0 when absent).
+    double seconds(const std::string& name) const;
+    bool has(const std::string& name) const;
+
+    /// An indented tree: each node's seconds, share of the total and peak memory.
+    std::string format() const;
+    /// {"name": .., "seconds": .., "peak_mib": .., "children": [..]}
+    std::string toJson() const;
+
+private:
+    std::vector<Node> mNodes;
+    size_t mOpen = 0;
+    double mStart = 0;
+};
+
+/// What the progress callback sees at each checkpoint.
+struct ProgressEvent
+{
+    const std::string& stage; ///< the innermost timing scope, e.g. "field"
+    size_t ranges;            ///< ranges that went on since the context was made or reset()
+};
+
+/// Return false to cancel. Called from worker threads, one call at a time.
+using ProgressCallback = std::function<bool(const ProgressEvent&)>;
+
+class Context
+{
+public:
+    explicit Context(Device device = Device::Cpu) : mDevice(device) {}
+
+    Device device() const { return mDevice; }
+    void setDevice(Device d) { mDevice = d; }
+
+    /// At most this many worker threads while a stage runs (0: all cores). The CLI's -j.
+    int threads() const { return mThreads; }
+    void setThreads(int n) { mThreads = n; }
+
+    TimingTree& timing() { return mTiming; }
+    const TimingTree& timing() const { return mTiming; }
+    /// Shorthand for a timing scope: auto t = ctx.scope("field");
+    TimingTree::Scope scope(const std::string& name) { return TimingTree::Scope(mTiming, name); }
+
+    void setProgress(ProgressCallback callback) { mProgress = std::move(callback); }
+    /// Ask for a stop from outside the callback (a signal handler's flag, another thread).
+    void cancel() { mCancelled.store(true); }
+    bool cancelled() const { return mCancelled.load(); }
+    /// Called once per range by every parallel stage: reports progress, and throws Cancelled
+    /// once a stop was asked for. Thread-safe.
+    void checkpoint();
+    /// Throws Cancelled when a stop was asked for (between stages, on the calling thread).
+    void throwIfCancelled() const;
+    /// Ranges that passed their checkpoint (and ran) since the context was made or reset().
+    size_t rangesBegun() const { return mRanges.load(); }
+    /// Clear the cancel flag and the range count (the timing tree is cleared separately).
+    void reset();
+
+private:
+    Device mDevice;
+    int mThreads = 0;
+    TimingTree mTiming;
+    ProgressCallback mProgress;
+    std::mutex mProgressMutex;
+    std::atomic<bool> mCancelled{false};
+    std::atomic<size_t> mRanges{0};
+};
+
+/// The process's peak resident memory so far, MiB.
+double peakMemoryMiB();
+
+} // namespace fluidsurf

@@ -1,0 +1,96 @@
+// Reconstruct.h - the whole reconstruction as one call (DESIGN.md, "Pipeline and layout"):
+//
+//   particles -> radius choice -> rasterizeParticles (neighbors, classify, narrow band, field,
+//   level set) -> meshLevelSet (marching cubes) -> [post-processing, ch. 5] -> result
+//
+// Front ends (the CLI, the benchmark, later Python) are thin layers over this header; the two
+// halves, rasterizeParticles (Rasterize.h) and meshLevelSet (MeshLevelSet.h), stay public.
+//
+//   fluidsurf::ReconstructParams params = fluidsurf::ReconstructParams::fromRadius(0.025);
+//   fluidsurf::Context ctx;                       // CPU, all cores; ctx.setDevice(Device::Auto)
+//   fluidsurf::ReconstructResult res = fluidsurf::reconstruct(particles, params, ctx);
+//   res.levelSet (FloatGrid "surface"), res.mesh, res.isolatedParticles, ctx.timing().format()
+#pragma once
+
+#include <fluidsurf/Context.h>
+#include <fluidsurf/Mesh.h>
+#include <fluidsurf/MeshLevelSet.h>
+#include <fluidsurf/Params.h>
+#include <fluidsurf/ParticleSet.h>
+#include <fluidsurf/Rasterize.h>
+
+#include <openvdb/openvdb.h>
+
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+
+/// The meshing section.
+struct MeshParams
+{
+    Mesher mesher = Mesher::MarchingCubes;
+};
+
+/// Mesh post-processing (thesis chapter 5: decimation, subdivision, isolated spheres): to come.
+struct PostProcessParams
+{
+};
+
+/// The curvature-adaptive 3-level grid (thesis chapter 6): to come.
+struct AdaptiveParams
+{
+};
+
+struct ReconstructParams
+{
+    /// r, world units: the particle radius (half the rest spacing). 0: chosen from the frame by
+    /// chooseRadius (the radius attribute, else an estimate; the result says which).
+    double radius = 0;
+    /// The field, with every length in units of r (Params::fromRadius(1): voxel 1 means dx = r,
+    /// influenceRadius 4 means R = 4r); field.radius is ignored (see radius above).
+    Params field = Params::fromRadius(1);
+    MeshParams mesh;
+    PostProcessParams post;
+    AdaptiveParams adaptive;
+
+    /// The DESIGN.md defaults for particle radius r.
+    static ReconstructParams fromRadius(double r);
+    /// The field parameters in world units for radius r.
+    Params fieldParams(double r) const;
+};
+
+enum class RadiusSource {
+    Given,     ///< ReconstructParams::radius
+    Attribute, ///< the largest value of the radius attribute (pscale)
+    Estimated  ///< half the median nearest-neighbour distance: an estimate, say so
+};
+const char* radiusSourceName(RadiusSource s); ///< "given", "attribute", "estimate"
+
+struct RadiusChoice
+{
+    double radius = 0;
+    RadiusSource source = RadiusSource::Given;
+    std::string detail; ///< e.g. "largest value of the attribute 'pscale'"
+};
+
+/// r for these particles: given (> 0), else the radius attribute's largest value (when
+/// useAttribute), else an estimate. ValueError when none can be had (fewer than two particles).
+RadiusChoice chooseRadius(const ParticleSet& particles, double given, bool useAttribute = true);
+
+struct ReconstructResult
+{
+    openvdb::FloatGrid::Ptr levelSet; ///< the "surface" level set (Rasterize.h)
+    TriangleMesh mesh;
+    std::vector<uint32_t> isolatedParticles; ///< input indices left out of the surface
+    RadiusChoice radius;
+    RasterizeStats field;
+    MeshStats meshing;
+};
+
+/// The whole reconstruction of one frame. sourceName goes into the level set's metadata.
+/// ValueError for invalid parameters or input, Cancelled when ctx's callback stopped it.
+ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructParams& params,
+                              Context& ctx, const std::string& sourceName = "");
+
+} // namespace fluidsurf

@@ -1,0 +1,90 @@
+// CpuBackend.cc - the backend on the CPU (TBB): the stages of neighbors/, classify/, narrowband/
+// and field/, in order, each timed in the context.
+#include "backend/Backend.h"
+#include "backend/CpuStages.h"
+#include "field/GatherField.h"
+#include "narrowband/NarrowBand.h"
+
+#include <algorithm>
+
+namespace fluidsurf {
+namespace backend {
+
+Classified classifyOnCpu(const Particles& particles, const Params& params, Context& ctx, Band& out)
+{
+    Classified c;
+    {
+        const auto t = ctx.scope("neighbors");
+        const double cellSize = std::min(params.influenceRadius, params.smoothingLength);
+        c.index = neighbors::buildCellIndex(particles.positions.data(),
+                                            particles.radii.empty() ? nullptr
+                                                                    : particles.radii.data(),
+                                            particles.positions.size(), cellSize, ctx);
+    }
+    const auto t = ctx.scope("classify");
+    c.classes = classify::classifyParticles(c.index, params, ctx);
+    out.interior = c.classes.interior, out.surface = c.classes.surface;
+    out.splash = c.classes.splash, out.isolated = c.classes.isolated;
+    out.isolatedParticles.clear();
+    if (!params.keepIsolated)
+        for (size_t i = 0; i < c.classes.classes.size(); ++i)
+            if (c.classes.classes[i] == classify::Isolated)
+                out.isolatedParticles.push_back(c.index.order[i]);
+    std::sort(out.isolatedParticles.begin(), out.isolatedParticles.end());
+    return c;
+}
+
+neighbors::CellIndex fieldParticles(Classified&& c, const Params& params)
+{
+    if (!c.classes.isolated || params.keepIsolated) return std::move(c.index);
+    std::vector<uint8_t> keep(c.classes.classes.size());
+    for (size_t i = 0; i < keep.size(); ++i)
+        keep[i] = c.classes.classes[i] != classify::Isolated;
+    return neighbors::selectParticles(c.index, keep);
+}
+
+namespace {
+
+class CpuBackend : public Backend
+{
+public:
+    std::string name() const override { return "cpu"; }
+
+    bool narrowBand(const Particles& particles, const Params& params, const Level& level,
+                    double width, Context& ctx, Band& out) override
+    {
+        Classified c = classifyOnCpu(particles, params, ctx, out);
+        {
+            const auto t = ctx.scope("narrow band");
+            const openvdb::MaskTree::Ptr band =
+                narrowband::buildNarrowBand(c.index, c.classes, params, level, width, ctx);
+            out.tree = std::make_shared<openvdb::FloatTree>(
+                *band, float(params.background(level)), openvdb::TopologyCopy());
+        }
+        const auto t = ctx.scope("field");
+        mOwned = fieldParticles(std::move(c), params);
+        mParticles = &mOwned;
+        out.evaluations = field::evaluateField(*out.tree, mOwned, params, level, ctx);
+        return true;
+    }
+
+    void useParticles(const neighbors::CellIndex& particles) override { mParticles = &particles; }
+
+    size_t evaluate(openvdb::FloatTree& tree, const Params& params, const Level& level,
+                    Context& ctx) override
+    {
+        if (!mParticles) throw Error("CPU backend: evaluate() before the particles were given");
+        return field::evaluateField(tree, *mParticles, params, level, ctx);
+    }
+
+private:
+    neighbors::CellIndex mOwned;
+    const neighbors::CellIndex* mParticles = nullptr;
+};
+
+} // namespace
+
+std::unique_ptr<Backend> makeCpuBackend() { return std::make_unique<CpuBackend>(); }
+
+} // namespace backend
+} // namespace fluidsurf

@@ -1,0 +1,278 @@
+// CudaBackend.cc - the backend on the GPU (cuda/, through its host facade): the narrow band from
+// the sort on runs in cuda::NarrowBandPipeline, whose leaf blocks (origin + 8 mask words + the
+// active values) become FloatTree leaves in parallel here; evaluate() sends the leaves of any
+// tree to the device (band completion, the gather-full baseline) and fills in what comes back.
+#include "backend/Backend.h"
+
+#include <fluidsurf/Error.h>
+
+#ifdef FLUIDSURF_HAS_CUDA
+#include "classify/Classify.h"
+
+#include "facade/Device.h"
+#include "facade/FieldGather.h"
+#include "facade/NarrowBandPipeline.h"
+
+#include <openvdb/tree/LeafManager.h>
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#endif
+
+namespace fluidsurf {
+namespace backend {
+
+#ifdef FLUIDSURF_HAS_CUDA
+
+namespace {
+
+using LeafT = openvdb::FloatTree::LeafNodeType;
+
+/// The values of every active voxel of tree from compute(origins, masks, leafCount), which
+/// returns 512 values per leaf. Returns the number of active voxels.
+template <typename Compute> size_t fillActiveVoxels(openvdb::FloatTree& tree, Compute&& compute)
+{
+    openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
+    const size_t n = leaves.leafCount();
+    std::vector<int32_t> origins(3 * n);
+    std::vector<uint64_t> masks(8 * n);
+    leaves.foreach ([&](const LeafT& leaf, size_t i) {
+        for (int a = 0; a < 3; ++a)
+            origins[3 * i + a] = leaf.origin()[a];
+        for (int w = 0; w < 8; ++w)
+            masks[8 * i + w] = leaf.getValueMask().template getWord<uint64_t>(w);
+    });
+    const std::vector<float> values = compute(origins.data(), masks.data(), n);
+    leaves.foreach ([&](LeafT& leaf, size_t i) {
+        for (auto v = leaf.beginValueOn(); v; ++v)
+            v.setValue(values[i * 512 + v.pos()]);
+    });
+    return tree.activeVoxelCount();
+}
+
+cuda::FieldSettings fieldSettings(const Params& params, const Level& level)
+{
+    cuda::FieldSettings f;
+    f.voxelSize = level.voxelSize;
+    f.influenceRadius = params.influenceRadius;
+    f.radius = params.radius;
+    f.tLow = params.tLow, f.tHigh = params.tHigh;
+    f.background = float(params.background(level));
+    f.ssp07 = params.field == FieldKind::Ssp07;
+    return f;
+}
+
+/// A tree from leaf blocks: leaves built in parallel, then linked in (cheap, serial).
+openvdb::FloatTree::Ptr treeFromBlocks(const cuda::LeafBlocks& blocks, float background)
+{
+    const size_t n = blocks.size();
+    // Where each leaf's active values start in the compact array.
+    std::vector<size_t> offsets(n + 1, 0);
+    for (size_t i = 0; i < n; ++i) {
+        size_t count = 0;
+        for (int w = 0; w < 8; ++w)
+            count += size_t(__builtin_popcountll(blocks.masks[8 * i + w]));
+        offsets[i + 1] = offsets[i] + count;
+    }
+    if (offsets[n] != blocks.values.size())
+        throw Error("CUDA pipeline: leaf blocks and values disagree");
+    std::vector<LeafT*> built(n);
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                const openvdb::Coord origin(blocks.origins[3 * i], blocks.origins[3 * i + 1],
+                                            blocks.origins[3 * i + 2]);
+                auto* leaf = new LeafT(origin, background);
+                float* buffer = leaf->buffer().data();
+                LeafT::NodeMaskType mask;
+                const float* value = &blocks.values[offsets[i]];
+                for (int w = 0; w < 8; ++w) {
+                    const uint64_t word = blocks.masks[8 * i + w];
+                    mask.template getWord<uint64_t>(w) = word;
+                    for (uint64_t bits = word; bits; bits &= bits - 1)
+                        buffer[64 * w + __builtin_ctzll(bits)] = *value++;
+                }
+                leaf->setValueMask(mask);
+                built[i] = leaf;
+            }
+        });
+    auto tree = std::make_shared<openvdb::FloatTree>(background);
+    for (LeafT* leaf : built)
+        tree->addLeaf(leaf); // the tree takes ownership
+    return tree;
+}
+
+class CudaBackend : public Backend
+{
+public:
+    explicit CudaBackend(std::string name) : mName(std::move(name)) {}
+
+    std::string name() const override { return mName; }
+
+    bool narrowBand(const Particles& particles, const Params& params, const Level& level,
+                    double width, Context& ctx, Band& out) override
+    {
+        const std::vector<Vec3f>& positions = particles.positions;
+        const std::vector<float>& radii = particles.radii;
+        if (positions.empty()) { // nothing for the device to do
+            out.tree = std::make_shared<openvdb::FloatTree>(float(params.background(level)));
+            mPipeline.reset();
+            return true;
+        }
+        if (positions.size() >= (size_t(1) << 32) - 1)
+            throw ValueError("more than 2^32 - 2 particles in one frame");
+        auto pipeline = std::make_unique<cuda::NarrowBandPipeline>();
+        Vec3f lo, hi;
+        {
+            const auto t = ctx.scope("upload");
+            pipeline->upload(positions.data(), radii.empty() ? nullptr : radii.data(),
+                             positions.size(), lo, hi);
+        }
+        // Leaf keys on the device hold 21 bits per axis around leaf 0.
+        const double dx = level.voxelSize, limit = double(1 << 20) * 8 * dx;
+        for (int a = 0; a < 3; ++a)
+            if (!(std::abs(double(lo[a]) - width) < limit - 16 * dx &&
+                  std::abs(double(hi[a]) + width) < limit - 16 * dx))
+                return false;
+        ctx.throwIfCancelled();
+
+        cuda::PipelineSettings s;
+        s.cellSize = std::min(params.influenceRadius, params.smoothingLength);
+        BBox3f box;
+        box.expand(lo), box.expand(hi);
+        neighbors::cellGrid(box, s.cellSize, s.cellOrigin, s.cellDims);
+        const classify::KernelConstants k = classify::kernelConstants(params);
+        s.h2 = k.h2;
+        s.smoothingLength = k.h, s.poly6 = k.poly6, s.gradientScale = k.gradientScale;
+        s.uniformVolume = float(k.uniformVolume);
+        s.splashNeighbours = params.splashNeighbours,
+        s.surfaceNeighbours = params.surfaceNeighbours;
+        s.colorFieldThreshold = params.colorFieldThreshold,
+        s.colorGradientThreshold = params.colorGradientThreshold;
+        s.keepIsolated = params.keepIsolated;
+        s.bandWidth = width;
+        s.field = fieldSettings(params, level);
+        cuda::LeafBlocks blocks;
+        {
+            const auto t = ctx.scope("device field");
+            blocks = pipeline->run(s);
+        }
+        ctx.throwIfCancelled();
+        const cuda::ClassCounts& counts = pipeline->classCounts();
+        out.interior = counts.interior, out.surface = counts.surface;
+        out.splash = counts.splash, out.isolated = counts.isolated;
+        out.isolatedParticles.clear();
+        if (!params.keepIsolated) out.isolatedParticles = pipeline->isolatedParticles();
+        {
+            const auto t = ctx.scope("vdb build");
+            out.tree = treeFromBlocks(blocks, s.field.background);
+        }
+        out.evaluations = out.tree->activeVoxelCount();
+        mPipeline = std::move(pipeline);
+        mIndex = nullptr;
+        return true;
+    }
+
+    void useParticles(const neighbors::CellIndex& particles) override
+    {
+        mIndex = &particles;
+        mPipeline.reset();
+    }
+
+    size_t evaluate(openvdb::FloatTree& tree, const Params& params, const Level& level,
+                    Context& ctx) override
+    {
+        ctx.throwIfCancelled();
+        if (mPipeline) // the particles are on the device already
+            return fillActiveVoxels(tree,
+                                    [&](const int32_t* origins, const uint64_t* masks, size_t n) {
+                                        return mPipeline->evaluate(origins, masks, n);
+                                    });
+        if (!mIndex) throw Error("CUDA backend: evaluate() before the particles were given");
+        const neighbors::CellIndex& particles = *mIndex;
+        cuda::GatherTimes times;
+        const size_t evaluations =
+            fillActiveVoxels(tree, [&](const int32_t* origins, const uint64_t* masks, size_t n) {
+                cuda::GatherInput in;
+                in.positions = particles.positions.data();
+                in.radii = particles.radii.empty() ? nullptr : particles.radii.data();
+                in.particleCount = particles.size();
+                in.tableKeys = particles.tableKeys.data();
+                in.tableCells = particles.tableCells.data();
+                in.tableSize = particles.tableKeys.size();
+                in.cellStarts = particles.starts.data();
+                in.cellCount = particles.cellCount();
+                in.cellSize = particles.cellSize;
+                for (int a = 0; a < 3; ++a)
+                    in.cellOrigin[a] = particles.origin[a], in.cellDims[a] = particles.dims[a];
+                in.leafOrigins = origins;
+                in.leafActive = masks;
+                in.leafCount = n;
+                in.field = fieldSettings(params, level);
+                return cuda::gatherField(in, &times);
+            });
+        mGatherStages = {{"upload", times.uploadMs * 1e-3},
+                         {"gather", times.kernelMs * 1e-3},
+                         {"download", times.downloadMs * 1e-3}};
+        mGatherBytes = times.deviceBytes;
+        return evaluations;
+    }
+
+    void deviceStats(RasterizeStats& stats) const override
+    {
+        if (mPipeline) {
+            stats.gpuStages.clear();
+            for (const auto& st : mPipeline->stageMs())
+                stats.gpuStages.push_back({st.first, st.second * 1e-3});
+            stats.gpuBytes = mPipeline->peakBytes();
+        } else {
+            stats.gpuStages = mGatherStages;
+            stats.gpuBytes = mGatherBytes;
+        }
+    }
+
+private:
+    std::string mName;
+    std::unique_ptr<cuda::NarrowBandPipeline> mPipeline; // holds the particles on the device
+    const neighbors::CellIndex* mIndex = nullptr;
+    std::vector<StageTime> mGatherStages;
+    size_t mGatherBytes = 0;
+};
+
+} // namespace
+
+bool cudaUsable(std::string* reason, std::string* deviceName)
+{
+    const cuda::DeviceInfo info = cuda::openDevice();
+    if (reason) *reason = info.reason;
+    if (deviceName) *deviceName = info.name;
+    return info.usable;
+}
+
+std::unique_ptr<Backend> makeCudaBackend()
+{
+    std::string reason, name;
+    if (!cudaUsable(&reason, &name))
+        throw Error("CUDA was requested but there is no usable GPU: " + reason);
+    return std::make_unique<CudaBackend>(name);
+}
+
+#else
+
+bool cudaUsable(std::string* reason, std::string*)
+{
+    if (reason) *reason = "this build of fluidsurf has no CUDA backend";
+    return false;
+}
+
+std::unique_ptr<Backend> makeCudaBackend()
+{
+    throw Error(
+        "CUDA was requested but this build of fluidsurf has no CUDA backend (rebuild with nvcc)");
+}
+
+#endif
+
+} // namespace backend
+} // namespace fluidsurf

@@ -1,0 +1,53 @@
+// SelectBackend.cc - which backend runs, in one place: Device::Cpu, Cuda (an error without a
+// usable GPU) or Auto (the GPU when usable; the CPU again, saying why, when CUDA fails mid-way).
+#include "backend/Backend.h"
+
+#include <fluidsurf/Rasterize.h>
+
+#include <future>
+
+namespace fluidsurf {
+
+void prepareDevice(Device device)
+{
+    if (device == Device::Cpu) return;
+    // Held until exit: the future's destructor waits for the context, never a half-made one.
+    static std::future<void> opening =
+        std::async(std::launch::async, [] { backend::cudaUsable(); });
+}
+
+namespace backend {
+
+void runOn(Device device, bool gpuUsable, const std::string& gpuReason, RasterizeStats& stats,
+           const std::function<void(Backend&)>& work)
+{
+    if (device == Device::Cuda && !gpuUsable)
+        throw Error("CUDA was requested but there is no usable GPU: " + gpuReason);
+    if (device == Device::Cpu || !gpuUsable) {
+        const std::unique_ptr<Backend> cpu = makeCpuBackend();
+        stats.device = cpu->name();
+        work(*cpu);
+        return;
+    }
+    const std::unique_ptr<Backend> gpu = makeCudaBackend();
+    try {
+        stats.device = gpu->name();
+        work(*gpu);
+        gpu->deviceStats(stats);
+    } catch (const ValueError&) {
+        throw; // the input's fault: the CPU would say the same
+    } catch (const Cancelled&) {
+        throw;
+    } catch (const Error& e) {
+        // CUDA failed (out of device memory, ...): Auto means "the GPU if it can", so the CPU
+        // takes over and says why; an explicit cuda request reports the failure.
+        if (device == Device::Cuda) throw;
+        const std::unique_ptr<Backend> cpu = makeCpuBackend();
+        stats.device = std::string("cpu (CUDA failed: ") + e.what() + ")";
+        stats.gpuStages.clear(), stats.gpuBytes = 0;
+        work(*cpu);
+    }
+}
+
+} // namespace backend
+} // namespace fluidsurf

@@ -1,0 +1,179 @@
+// Rasterize.cc - the rasterize pipeline: checks the input, picks the backend, and runs the
+// stages in order through the context (timing scopes, checkpoints, thread limit).
+#include <fluidsurf/Error.h>
+#include <fluidsurf/Rasterize.h>
+
+#include "backend/Backend.h"
+#include "backend/CpuStages.h"
+#include "field/CompleteBand.h"
+#include "field/ScatterField.h"
+#include "levelset/LevelSet.h"
+#include "narrowband/NarrowBand.h"
+#include "util/Threads.h"
+
+#include <algorithm>
+#include <cmath>
+#include <future>
+
+namespace fluidsurf {
+
+namespace {
+
+/// Per-particle radii from the radius attribute, or empty for the uniform radius.
+std::vector<float> particleRadii(const ParticleSet& ps, const Params& params)
+{
+    const Attribute* a = params.perParticleRadii ? ps.find(AttributeRole::Radius) : nullptr;
+    if (!a) return {};
+    for (size_t i = 0; i < a->floats.size(); ++i)
+        if (!(a->floats[i] > 0) || !std::isfinite(a->floats[i]))
+            throw ValueError("radius attribute '" + a->name + "' of particle " + std::to_string(i) +
+                             " is " + std::to_string(a->floats[i]) +
+                             "; radii must be positive (or ignore the attribute)");
+    return a->floats;
+}
+
+struct Run
+{
+    const backend::Particles& particles;
+    const Params& params;
+    const Level& level;
+    Context& ctx;
+    RasterizeResult& result;
+
+    /// The band with phi, completed where a zero crossing reaches its edge (thesis ch. 4).
+    openvdb::FloatTree::Ptr narrowBand(backend::Backend& b)
+    {
+        RasterizeStats& stats = result.stats;
+        backend::Band band;
+        std::unique_ptr<backend::Backend> cpu;
+        backend::Backend* on = &b;
+        if (!b.narrowBand(particles, params, level, stats.bandWidth, ctx, band)) {
+            cpu = backend::makeCpuBackend();
+            on = cpu.get();
+            stats.device = "cpu (the frame lies beyond the GPU's leaf keys)";
+            on->narrowBand(particles, params, level, stats.bandWidth, ctx, band);
+        }
+        take(band);
+        const auto t = ctx.scope("complete band");
+        stats.bandCompletion = field::completeBand(
+            *band.tree, level,
+            [&](openvdb::FloatTree& grown) { on->evaluate(grown, params, level, ctx); }, ctx);
+        stats.fieldEvaluations += stats.bandCompletion;
+        return band.tree;
+    }
+
+    /// The thesis' baselines: indexed and classified on the CPU, then every vertex of the
+    /// bounding volume evaluated by the backend (gather-full) or the serial scatter.
+    openvdb::FloatTree::Ptr baseline(backend::Backend& b)
+    {
+        RasterizeStats& stats = result.stats;
+        backend::Band band;
+        neighbors::CellIndex index =
+            backend::fieldParticles(backend::classifyOnCpu(particles, params, ctx, band), params);
+        take(band);
+        if (params.method == FieldMethod::Scatter) {
+            const auto t = ctx.scope("field");
+            return field::scatterField(index, params, level, ctx, &stats.fieldEvaluations);
+        }
+        auto tree = std::make_shared<openvdb::FloatTree>(float(params.background(level)));
+        {
+            const auto t = ctx.scope("bounding volume");
+            const openvdb::CoordBBox box = narrowband::boundingVolume(index, params, level);
+            if (!box.empty()) {
+                narrowband::checkDenseMemory(box, sizeof(float) * 1.2, "gather-full");
+                tree->denseFill(box, float(params.background(level)), true);
+            }
+        }
+        const auto t = ctx.scope("field");
+        b.useParticles(index);
+        stats.fieldEvaluations = b.evaluate(*tree, params, level, ctx);
+        return tree;
+    }
+
+    void take(backend::Band& band)
+    {
+        RasterizeStats& stats = result.stats;
+        stats.interior = band.interior, stats.surface = band.surface;
+        stats.splash = band.splash, stats.isolated = band.isolated;
+        stats.fieldEvaluations = band.evaluations;
+        result.isolatedParticles = std::move(band.isolatedParticles);
+    }
+};
+
+RasterizeResult rasterize(const ParticleSet& ps, const Params& params, Context& ctx,
+                          const std::string& source)
+{
+    const auto timer = ctx.scope("rasterize");
+    // Looking for the GPU (and creating its context, unless prepareDevice did earlier) runs on
+    // a thread while the radii are checked.
+    struct GpuCheck
+    {
+        bool usable = false;
+        std::string reason;
+    };
+    const Device device = params.method == FieldMethod::Scatter ? Device::Cpu : ctx.device();
+    std::future<GpuCheck> gpuCheck;
+    if (device != Device::Cpu)
+        gpuCheck = std::async(std::launch::async, [] {
+            GpuCheck c;
+            c.usable = backend::cudaUsable(&c.reason);
+            return c;
+        });
+    RasterizeResult result;
+    RasterizeStats& stats = result.stats;
+    stats.particles = ps.size();
+    const Level level = params.level();
+    const std::vector<float> radii = particleRadii(ps, params);
+    float maxRadius = float(params.radius);
+    for (float r : radii)
+        maxRadius = std::max(maxRadius, r);
+    stats.bandWidth = narrowband::effectiveBandWidth(params, level, maxRadius);
+    GpuCheck gpu;
+    if (gpuCheck.valid()) {
+        const auto t = ctx.scope("cuda context"); // waiting for it, unless made earlier
+        gpu = gpuCheck.get();
+    }
+
+    const backend::Particles particles{ps.positions, radii};
+    openvdb::FloatTree::Ptr tree;
+    backend::runOn(device, gpu.usable, gpu.reason, stats, [&](backend::Backend& b) {
+        Run run{particles, params, level, ctx, result};
+        tree = params.method == FieldMethod::NarrowBand ? run.narrowBand(b) : run.baseline(b);
+    });
+
+    const auto t = ctx.scope("level set");
+    levelset::GridInfo info;
+    info.particles = ps.size();
+    info.isolated = result.isolatedParticles.size();
+    info.source = source;
+    result.grid = levelset::finishLevelSet(tree, params, level,
+                                           params.method != FieldMethod::NarrowBand, info);
+    stats.activeVoxels = result.grid->activeVoxelCount();
+    stats.leaves = result.grid->tree().leafCount();
+    return result;
+}
+
+} // namespace
+
+RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, Context& ctx,
+                                   const std::string& source)
+{
+    params.validate();
+    ps.validate();
+    openvdb::initialize();
+    for (size_t i = 0; i < ps.size(); ++i)
+        if (!ps.positions[i].isFinite())
+            throw ValueError("particle " + std::to_string(i) + " has a non-finite position");
+    if (ctx.device() == Device::Cuda && params.method == FieldMethod::Scatter)
+        throw ValueError("the scatter baseline runs on the CPU only (--device cpu)");
+    return util::withThreads(ctx, [&] { return rasterize(ps, params, ctx, source); });
+}
+
+RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params,
+                                   const std::string& source)
+{
+    Context ctx;
+    return rasterizeParticles(ps, params, ctx, source);
+}
+
+} // namespace fluidsurf

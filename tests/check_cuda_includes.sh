@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# check_cuda_includes.sh SOURCE_DIR - cuda/ sees plain arrays and its own headers: from the
+# library it may include only the public Vec3.h and Error.h and the plain math that both backends
+# compile (util/HostDevice.h, field/FieldMath.h, classify/ClassRule.h). No OpenVDB, ever.
+set -euo pipefail
+cd "$1"
+allowed='^(facade/|fluidsurf/Vec3\.h|fluidsurf/Error\.h|util/HostDevice\.h|field/FieldMath\.h|classify/ClassRule\.h|cub/|cuda_runtime|[a-z_]+(\.h)?$|[A-Z][A-Za-z]*\.cuh$)'
+bad=0
+while IFS= read -r line; do
+    file=${line%%:*}
+    inc=$(sed -E 's/.*#include [<"]([^>"]+)[>"].*/\1/' <<<"$line")
+    if ! grep -Eq "$allowed" <<<"$inc"; then
+        echo "cuda/ includes '$inc' ($file): not one of its own headers or the shared math"
+        bad=1
+    fi
+done < <(grep -rn '#include' cuda/src cuda/facade)
+# The shared math includes nothing of the library beyond the macro.
+if grep -n '#include "' lib/src/field/FieldMath.h lib/src/classify/ClassRule.h | grep -v 'util/HostDevice.h'; then
+    echo "the shared math headers include library headers"; bad=1
+fi
+[ "$bad" = 0 ] && echo "cuda includes: 1 passed, 0 failed" || { echo "cuda includes: 0 passed, 1 failed"; exit 1; }

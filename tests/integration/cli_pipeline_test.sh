@@ -1,0 +1,103 @@
+#!/usr/bin/env bash
+# cli_pipeline_test.sh FLUIDSURF_BINARY - end-to-end checks of what the CLI does around its one
+# library call: `info` on .vdb files and meshes, the -v timing tree, --stats JSON (parsed and
+# summed by /usr/bin/python3, independently of the code that wrote it), and Ctrl-C (SIGINT) as a
+# clean stop: exit code 130, no output, no temporary file.
+set -u
+BIN=$1
+T=$(mktemp -d /tmp/fluidsurf_clip_XXXXXX)
+trap 'rm -rf "$T"' EXIT
+pass=0; fail=0
+ok()   { pass=$((pass + 1)); }
+bad()  { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
+check() { local what=$1; shift; if "$@"; then ok; else bad "$what"; fi; }
+expect_error() {
+    local what=$1 pattern=$2; shift 2
+    local out rc
+    out=$("$@" 2>&1 >/dev/null); rc=$?
+    if [ $rc -eq 0 ]; then bad "$what: exit code 0"; return; fi
+    if ! grep -q -- "$pattern" <<<"$out"; then bad "$what: message '$out' lacks '$pattern'"; return; fi
+    if [ "$(grep -c 'fluidsurf: error:' <<<"$out")" -ne 1 ]; then bad "$what: not exactly one error line: $out"; return; fi
+    ok
+}
+
+"$BIN" generate drop --count 20000 -r 0.01 -o "$T/drop.bgeo" >/dev/null
+"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop.obj" --vdb "$T/drop.vdb" -q
+
+# --- info on a level set, OpenVDB's own sphere, a mesh ----------------------------------------
+out=$("$BIN" info "$T/drop.vdb")
+check "info .vdb: grid, class and type" grep -q "grid        'surface'  class level set, type float" <<<"$out"
+check "info .vdb: voxel size" grep -q "voxel size  (0.01, 0.01, 0.01)" <<<"$out"
+check "info .vdb: active voxels" grep -Eq "active      [0-9,]+ voxels in [0-9,]+ leaves" <<<"$out"
+check "info .vdb: bounding box" grep -Eq "bbox        \[-?[0-9]+, -?[0-9]+, -?[0-9]+\] \.\. \[" <<<"$out"
+check "info .vdb: metadata" grep -q "fluidsurf:particle_radius *0.01" <<<"$out"
+if command -v vdb_print >/dev/null; then
+    n=$(vdb_print -l "$T/drop.vdb" | sed -n 's/.*Number of active voxels: *\([0-9,]*\).*/\1/p')
+    check "info .vdb: active voxels as vdb_print counts them ($n)" grep -q "active      $n voxels" <<<"$out"
+fi
+if /usr/bin/python3 -c 'import pyopenvdb' 2>/dev/null; then
+    /usr/bin/python3 -c "
+import pyopenvdb as vdb
+g = vdb.createLevelSetSphere(radius=2.0, center=(1, 2, 3), voxelSize=0.1, halfWidth=3.0)
+g.name = 'sphere'
+vdb.write('$T/sphere.vdb', grids=[g])"
+    out=$("$BIN" info "$T/sphere.vdb")
+    check "info on OpenVDB's sphere: name and class" grep -q "grid        'sphere'  class level set, type float" <<<"$out"
+    check "info on OpenVDB's sphere: voxel size" grep -q "voxel size  (0.1, 0.1, 0.1)" <<<"$out"
+    check "mesh OpenVDB's sphere, then info on the OBJ: watertight" bash -c "'$BIN' mesh '$T/sphere.vdb' -o '$T/sphere.obj' -q && '$BIN' info '$T/sphere.obj' | grep -q 'check .*watertight'"
+else
+    echo "note: /usr/bin/python3 has no pyopenvdb; OpenVDB's sphere is checked by the unit tests only"
+fi
+out=$("$BIN" info "$T/drop.obj")
+check "info .obj: vertices with normals" grep -Eq "vertices    [0-9,]+ \(with normals\)" <<<"$out"
+check "info .obj: triangles" grep -Eq "triangles   [0-9,]+" <<<"$out"
+check "info .obj: checkMesh report" grep -q "check .*watertight" <<<"$out"
+"$BIN" mesh "$T/drop.vdb" -o "$T/drop.ply" -q
+check "info .ply mesh" bash -c "'$BIN' info '$T/drop.ply' | grep -q 'PLY mesh'"
+printf 'v 0 0 0\nv 1 0 0\nf 1 2 7\n' >"$T/bad.obj"
+expect_error "info: corrupt OBJ" "outside the 2 vertices read so far (at line 3)" "$BIN" info "$T/bad.obj"
+head -c 300 "$T/drop.vdb" >"$T/cut.vdb"
+expect_error "info: truncated .vdb" "cut.vdb" "$BIN" info "$T/cut.vdb"
+
+# --- -v: the timing tree; --stats: JSON whose stages add up to the total -----------------------
+out=$("$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/v.obj" --vdb "$T/v.vdb" -v --check --stats "$T/stats.json")
+check "-v: the tree's root and the top-level stages" bash -c "grep -Eq '^  total +[0-9.]+ s +100.0%' <<<'$out' && grep -Eq '^    read ' <<<'$out' && grep -Eq '^    rasterize ' <<<'$out' && grep -Eq '^    mesh ' <<<'$out' && grep -Eq '^    write mesh ' <<<'$out'"
+check "-v: stages nested inside rasterize" grep -Eq '^      field +[0-9.]+ s +[0-9.]+%' <<<"$out"
+check "-v: peak memory" grep -Eq 'peak memory [0-9.]+ MiB' <<<"$out"
+check "--stats: JSON parses; stages add up to the total within 5%" /usr/bin/python3 - "$T/stats.json" <<'PY'
+import json, sys
+doc = json.load(open(sys.argv[1]))
+frame = doc["frames"][0]
+root = frame["timing"]
+assert root["name"] == "total" and root["seconds"] > 0
+top = sum(c["seconds"] for c in root["children"])
+assert abs(top - root["seconds"]) <= 0.05 * root["seconds"], (top, root["seconds"])
+names = [c["name"] for c in root["children"]]
+assert names == ["read", "rasterize", "mesh", "write vdb", "write mesh", "check"], names
+raster = root["children"][1]
+assert sum(c["seconds"] for c in raster["children"]) <= raster["seconds"] * 1.0001
+counts = frame["counts"]
+assert counts["particles"] == 20000 or counts["particles"] > 19000, counts
+assert counts["boundary_edges"] == 0 and counts["triangles"] > 0 and counts["active_voxels"] > 0
+assert doc["peak_memory_mib"] > 0
+PY
+check "--stats for a sequence: one entry per frame" bash -c "cp '$T/drop.bgeo' '$T/s_0001.bgeo' && cp '$T/drop.bgeo' '$T/s_0002.bgeo' && '$BIN' rasterize '$T/s_{:04}.bgeo' -r 0.01 -o '$T/s_{:04}.vdb' -q --stats '$T/seq.json' && /usr/bin/python3 -c \"import json; assert len(json.load(open('$T/seq.json'))['frames']) == 2\""
+
+# --- Ctrl-C: exit code 130, one line, nothing written -----------------------------------------
+"$BIN" generate drop --count 1000000 -r 0.01 -o "$T/big.bgeo" >/dev/null
+for cmd in reconstruct rasterize; do
+    out=$T/int_$cmd
+    if [ $cmd = reconstruct ]; then args=(-o "$out.obj" --vdb "$out.vdb"); else args=(-o "$out.vdb"); fi
+    "$BIN" $cmd "$T/big.bgeo" -r 0.01 --voxel 0.25 "${args[@]}" -q 2>"$T/int.err" &
+    pid=$!
+    sleep 0.6
+    kill -INT $pid
+    wait $pid
+    rc=$?
+    check "$cmd: Ctrl-C exits with 130 (got $rc)" test $rc -eq 130
+    check "$cmd: Ctrl-C says so in one line" bash -c "[ \$(wc -l <'$T/int.err') -eq 1 ] && grep -q interrupted '$T/int.err'"
+    check "$cmd: Ctrl-C leaves no output and no temporary file" bash -c "! ls '$T' | grep -Eq 'int_|tmp'"
+done
+
+echo "cli pipeline: $pass passed, $fail failed"
+[ $fail -eq 0 ]

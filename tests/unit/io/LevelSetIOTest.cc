@@ -1,0 +1,152 @@
+// LevelSetIOTest.cc - describing .vdb files (ours and OpenVDB's own sphere) and reading meshes
+// back: the facts `fluidsurf info` prints, checked against the grids and meshes themselves.
+#include "TestData.h"
+
+#include <fluidsurf/Error.h>
+#include <fluidsurf/MeshCheck.h>
+#include <fluidsurf/MeshLevelSet.h>
+#include <fluidsurf/Rasterize.h>
+#include <fluidsurf/Scenes.h>
+#include <fluidsurf/io/LevelSetIO.h>
+#include <fluidsurf/io/MeshIO.h>
+
+#include <openvdb/tools/LevelSetSphere.h>
+
+#include <gtest/gtest.h>
+
+namespace fluidsurf {
+namespace {
+
+std::string meta(const io::GridDescription& g, const std::string& name)
+{
+    for (const auto& m : g.metadata)
+        if (m.first == name) return m.second;
+    return "<missing>";
+}
+
+TEST(LevelSetIO, DescribesOurLevelSet)
+{
+    SceneParams sp;
+    sp.count = 3000;
+    const RasterizeResult res =
+        rasterizeParticles(generateScene(Scene::Ball, sp), Params::fromRadius(sp.radius), "ball");
+    const test::TempDir dir;
+    io::writeLevelSet({res.grid}, dir.path("ball.vdb"));
+    const std::vector<io::GridDescription> d = io::describeVdb(dir.path("ball.vdb"));
+    ASSERT_EQ(d.size(), 1u);
+    EXPECT_EQ(d[0].name, "surface");
+    EXPECT_EQ(d[0].gridClass, "level set");
+    EXPECT_EQ(d[0].valueType, "float");
+    EXPECT_DOUBLE_EQ(d[0].voxelSize[0], sp.radius);
+    EXPECT_EQ(d[0].activeVoxels, res.grid->activeVoxelCount());
+    EXPECT_EQ(d[0].leaves, res.grid->tree().leafCount());
+    const openvdb::CoordBBox box = res.grid->evalActiveVoxelBoundingBox();
+    for (int a = 0; a < 3; ++a) {
+        EXPECT_EQ(d[0].bboxMin[a], box.min()[a]);
+        EXPECT_EQ(d[0].bboxMax[a], box.max()[a]);
+    }
+    EXPECT_EQ(meta(d[0], "fluidsurf:source"), "ball");
+    EXPECT_EQ(meta(d[0], "fluidsurf:particle_count"), std::to_string(res.stats.particles));
+    EXPECT_NE(meta(d[0], "fluidsurf:particle_radius"), "<missing>");
+}
+
+TEST(LevelSetIO, DescribesOpenVdbsOwnSphere)
+{
+    openvdb::initialize();
+    auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        2.0f, openvdb::Vec3f(1, 2, 3), 0.1f, 3.0f);
+    sphere->setName("ball");
+    const test::TempDir dir;
+    io::writeLevelSet({sphere}, dir.path("sphere.vdb"));
+    const std::vector<io::GridDescription> d = io::describeVdb(dir.path("sphere.vdb"));
+    ASSERT_EQ(d.size(), 1u);
+    EXPECT_EQ(d[0].name, "ball");
+    EXPECT_EQ(d[0].gridClass, "level set");
+    EXPECT_FLOAT_EQ(float(d[0].voxelSize[1]), 0.1f);
+    EXPECT_EQ(d[0].activeVoxels, sphere->activeVoxelCount());
+    // Index-space bounds of a sphere of 20 voxels around (10, 20, 30), +-3 voxels of band.
+    EXPECT_NEAR(double(d[0].bboxMin[0]), 10 - 20 - 3, 1.0);
+    EXPECT_NEAR(double(d[0].bboxMax[2]), 30 + 20 + 3, 1.0);
+}
+
+TEST(LevelSetIO, CorruptVdbIsOneInputError)
+{
+    const test::TempDir dir;
+    test::writeFile(dir.path("bad.vdb"), std::string(" BDV\0\0\0\0garbage", 15));
+    EXPECT_THROW(io::describeVdb(dir.path("bad.vdb")), InputError);
+    EXPECT_THROW(io::describeVdb(dir.path("missing.vdb")), InputError);
+}
+
+TEST(MeshReader, ObjAndPlyRoundTrip)
+{
+    SceneParams sp;
+    sp.count = 3000;
+    const RasterizeResult res =
+        rasterizeParticles(generateScene(Scene::Drop, sp), Params::fromRadius(sp.radius));
+    const TriangleMesh mesh = meshLevelSet(*res.grid);
+    const test::TempDir dir;
+    for (const char* name : {"m.obj", "m.ply"}) {
+        io::writeMesh(mesh, dir.path(name));
+        const TriangleMesh back = io::readMesh(dir.path(name));
+        EXPECT_EQ(back.triangles, mesh.triangles) << name;
+        EXPECT_EQ(back.points, mesh.points) << name; // shortest round-trip floats in OBJ
+        EXPECT_EQ(back.normals.size(), mesh.normals.size()) << name;
+        const MeshReport a = checkMesh(mesh), b = checkMesh(back);
+        EXPECT_TRUE(b.watertight()) << name;
+        EXPECT_EQ(a.components, b.components) << name;
+        EXPECT_DOUBLE_EQ(a.volume, b.volume) << name;
+    }
+}
+
+TEST(MeshReader, PolygonsAndNegativeIndices)
+{
+    const test::TempDir dir;
+    // A unit cube: 6 quads, half of them with negative (relative) indices.
+    test::writeFile(dir.path("cube.obj"), "# cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                          "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                                          "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\n"
+                                          "f -6 -5 -1 -2\nf 2/1 3/2 7/3 6/4\nf 1//1 5//1 8//1 4//1\n");
+    const TriangleMesh m = io::readMesh(dir.path("cube.obj"));
+    EXPECT_EQ(m.points.size(), 8u);
+    EXPECT_EQ(m.triangles.size(), 12u);
+    const MeshReport r = checkMesh(m);
+    EXPECT_TRUE(r.watertight()) << describe(r);
+    EXPECT_NEAR(r.volume, 1.0, 1e-12);
+    // ASCII PLY of the same solid, one tetrahedron.
+    test::writeFile(dir.path("tet.ply"), "ply\nformat ascii 1.0\nelement vertex 4\n"
+                                         "property float x\nproperty float y\nproperty float z\n"
+                                         "element face 4\nproperty list uchar int vertex_indices\n"
+                                         "end_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                         "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+    const MeshReport t = checkMesh(io::readMesh(dir.path("tet.ply")));
+    EXPECT_TRUE(t.watertight()) << describe(t);
+    EXPECT_NEAR(t.volume, 1.0 / 6, 1e-7);
+}
+
+TEST(MeshReader, BadMeshesAreOneInputError)
+{
+    const test::TempDir dir;
+    auto message = [&](const std::string& name, const std::string& bytes) {
+        test::writeFile(dir.path(name), bytes);
+        try {
+            io::readMesh(dir.path(name));
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_NE(message("a.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\n").find("line 3"), std::string::npos);
+    EXPECT_NE(message("b.obj", "v 0 0 zero\n").find("not a number"), std::string::npos);
+    // A binary PLY whose header promises more faces than the file holds.
+    EXPECT_NE(message("c.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000000\n"
+                               "property float x\nproperty float y\nproperty float z\n"
+                               "end_header\n\x01\x02")
+                  .find("truncated"),
+              std::string::npos);
+    EXPECT_NE(message("d.ply", "not a ply\n").find("not a PLY file"), std::string::npos);
+    EXPECT_THROW(io::readMesh(dir.path("missing.obj")), InputError);
+    EXPECT_THROW(io::readMesh(dir.path("x.stl")), InputError);
+}
+
+} // namespace
+} // namespace fluidsurf

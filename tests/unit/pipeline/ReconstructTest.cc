@@ -1,0 +1,215 @@
+// ReconstructTest.cc - the one library call: it equals its two halves, chooses and reports the
+// radius, keeps the timing tree, honours the thread limit, and stops cleanly when cancelled.
+#include "TestData.h"
+
+#include <fluidsurf/MeshCheck.h>
+#include <fluidsurf/Reconstruct.h>
+#include <fluidsurf/Scenes.h>
+#include <fluidsurf/SpacingEstimate.h>
+#include <fluidsurf/io/LevelSetIO.h>
+#include <fluidsurf/io/MeshIO.h>
+
+#include <gtest/gtest.h>
+
+#include <tbb/info.h>
+
+#include <algorithm>
+#include <filesystem>
+
+namespace fluidsurf {
+namespace {
+
+bool sameMesh(const TriangleMesh& a, const TriangleMesh& b)
+{
+    return a.points == b.points && a.normals == b.normals && a.triangles == b.triangles;
+}
+
+TEST(Reconstruct, EqualsItsTwoHalvesAndIsWatertight)
+{
+    SceneParams sp;
+    sp.count = 20000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    Context ctx;
+    const ReconstructResult res =
+        reconstruct(ps, ReconstructParams::fromRadius(sp.radius), ctx, "drop");
+    const RasterizeResult half = rasterizeParticles(ps, Params::fromRadius(sp.radius), "drop");
+    EXPECT_EQ(res.levelSet->activeVoxelCount(), half.grid->activeVoxelCount());
+    EXPECT_TRUE(res.levelSet->tree().hasSameTopology(half.grid->tree()));
+    auto acc = half.grid->getConstAccessor();
+    for (auto it = res.levelSet->cbeginValueOn(); it; ++it)
+        ASSERT_EQ(*it, acc.getValue(it.getCoord()));
+    EXPECT_TRUE(sameMesh(res.mesh, meshLevelSet(*half.grid)));
+    EXPECT_EQ(res.isolatedParticles, half.isolatedParticles);
+    EXPECT_EQ(res.isolatedParticles.size(), size_t(sp.droplets));
+    EXPECT_TRUE(checkMesh(res.mesh).watertight());
+    EXPECT_EQ(res.meshing.triangles, res.mesh.triangles.size());
+    EXPECT_EQ(res.radius.source, RadiusSource::Given);
+    EXPECT_EQ(res.radius.radius, sp.radius);
+}
+
+TEST(Reconstruct, FieldLengthsAreInUnitsOfR)
+{
+    ReconstructParams p;
+    p.field.voxelSize = 0.5, p.field.influenceRadius = 8;
+    const Params f = p.fieldParams(0.02);
+    EXPECT_EQ(f.radius, 0.02);
+    EXPECT_EQ(f.voxelSize, 0.5 * 0.02);
+    EXPECT_EQ(f.influenceRadius, 8 * 0.02);
+    EXPECT_EQ(f.smoothingLength, 4 * 0.02);
+    EXPECT_EQ(f.bandWidth, 2 * 0.02);
+    EXPECT_EQ(f.halfWidth, 3); // voxels, not a length
+    const Params d = ReconstructParams::fromRadius(0.025).fieldParams(0.025);
+    const Params ref = Params::fromRadius(0.025);
+    EXPECT_EQ(d.voxelSize, ref.voxelSize);
+    EXPECT_EQ(d.influenceRadius, ref.influenceRadius);
+    EXPECT_EQ(d.bandWidth, ref.bandWidth);
+}
+
+TEST(Reconstruct, ChoosesTheRadiusAndSaysHow)
+{
+    SceneParams sp;
+    sp.count = 4000;
+    ParticleSet ps = generateScene(Scene::Block, sp);
+    // Estimated: half the median nearest-neighbour distance (the lattice spacing 2r here).
+    const RadiusChoice est = chooseRadius(ps, 0);
+    EXPECT_EQ(est.source, RadiusSource::Estimated);
+    EXPECT_EQ(est.radius, estimateSpacing(ps).radius);
+    EXPECT_NEAR(est.radius, sp.radius, 1e-6);
+    // The radius attribute's largest value, unless told to ignore it.
+    std::vector<float> pscale(ps.size(), 0.01f);
+    pscale[17] = 0.03f;
+    ps.addFloat("pscale", 1, pscale);
+    const RadiusChoice attr = chooseRadius(ps, 0);
+    EXPECT_EQ(attr.source, RadiusSource::Attribute);
+    EXPECT_EQ(attr.radius, 0.03f);
+    EXPECT_NE(attr.detail.find("pscale"), std::string::npos);
+    EXPECT_EQ(chooseRadius(ps, 0, false).source, RadiusSource::Estimated);
+    EXPECT_EQ(chooseRadius(ps, 0.5).radius, 0.5);
+    // Nothing to estimate from.
+    ParticleSet one;
+    one.positions.push_back(Vec3f(0, 0, 0));
+    EXPECT_THROW(chooseRadius(one, 0), ValueError);
+    // reconstruct() reports the choice it made.
+    ps.attributes.clear();
+    Context ctx;
+    const ReconstructResult res = reconstruct(ps, ReconstructParams(), ctx);
+    EXPECT_EQ(res.radius.source, RadiusSource::Estimated);
+    EXPECT_NEAR(res.field.bandWidth, 2 * res.radius.radius, 1e-12);
+}
+
+TEST(Reconstruct, TimingTreeNestsTheStages)
+{
+    SceneParams sp;
+    sp.count = 20000;
+    const ParticleSet ps = generateScene(Scene::Ball, sp);
+    Context ctx;
+    reconstruct(ps, ReconstructParams::fromRadius(sp.radius), ctx);
+    ctx.timing().finish();
+    const TimingTree& t = ctx.timing();
+    const auto& nodes = t.nodes();
+    // Top level: rasterize, then mesh; the field's stages nest inside rasterize.
+    ASSERT_EQ(t.root().children.size(), 2u);
+    EXPECT_EQ(nodes[t.root().children[0]].name, "rasterize");
+    EXPECT_EQ(nodes[t.root().children[1]].name, "mesh");
+    std::vector<std::string> inner;
+    double sum = 0;
+    for (size_t c : nodes[t.root().children[0]].children)
+        inner.push_back(nodes[c].name), sum += nodes[c].seconds;
+    const std::vector<std::string> expected{"neighbors", "classify", "narrow band",
+                                            "field",     "complete band", "level set"};
+    EXPECT_EQ(inner, expected);
+    EXPECT_LE(sum, nodes[t.root().children[0]].seconds);
+    EXPECT_LE(t.seconds("rasterize") + t.seconds("mesh"), t.root().seconds);
+    EXPECT_GT(nodes[t.root().children[1]].peakMiB, 0);
+    // The text and JSON forms name every node.
+    for (const std::string& name : expected) {
+        EXPECT_NE(t.format().find(name), std::string::npos) << name;
+        EXPECT_NE(t.toJson().find("\"" + name + "\""), std::string::npos) << name;
+    }
+}
+
+TEST(Reconstruct, ThreadLimitGivesTheSameResult)
+{
+    SceneParams sp;
+    sp.count = 20000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    Context all, one;
+    one.setThreads(1);
+    const ReconstructResult a = reconstruct(ps, ReconstructParams::fromRadius(sp.radius), all);
+    const ReconstructResult b = reconstruct(ps, ReconstructParams::fromRadius(sp.radius), one);
+    EXPECT_TRUE(sameMesh(a.mesh, b.mesh));
+}
+
+/// reconstruct() and then write, as a front end does; cancelled runs must leave no file.
+void reconstructAndWrite(const ParticleSet& ps, Context& ctx, const std::string& dir)
+{
+    const ReconstructResult res = reconstruct(ps, ReconstructParams::fromRadius(0.025), ctx);
+    io::writeLevelSet({res.levelSet}, dir + "/out.vdb");
+    io::writeMesh(res.mesh, dir + "/out.obj");
+}
+
+TEST(Reconstruct, CancelStopsWithinOneRangePerThreadAndWritesNothing)
+{
+    SceneParams sp;
+    sp.count = 1000000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    const test::TempDir dir;
+    Context ctx;
+    size_t calls = 0, rangesAtCancel = 0;
+    std::string stageAtCancel;
+    ctx.setProgress([&](const ProgressEvent& e) {
+        if (++calls < 6) return true; // a few ranges, then stop
+        rangesAtCancel = ctx.rangesBegun(), stageAtCancel = e.stage;
+        return false;
+    });
+    EXPECT_THROW(reconstructAndWrite(ps, ctx, dir.path()), Cancelled);
+    EXPECT_EQ(calls, 6u); // never called again once it said stop
+    // Ranges already past their checkpoint finish; no thread starts another.
+    const size_t threads = size_t(tbb::info::default_concurrency());
+    EXPECT_LE(ctx.rangesBegun() - rangesAtCancel, threads)
+        << "ranges begun after the cancel, stage " << stageAtCancel;
+    EXPECT_FALSE(ctx.timing().has("mesh")) << "a later stage began after the cancel";
+    EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << "a cancelled run left a file";
+}
+
+TEST(Reconstruct, EveryParallelStageChecksForCancel)
+{
+    SceneParams sp;
+    sp.count = 30000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    const std::vector<std::string> stages{"neighbors", "classify", "narrow band", "field",
+                                          "complete band", "mesh"};
+    for (size_t i = 0; i < stages.size(); ++i) {
+        Context ctx;
+        ctx.setProgress([&](const ProgressEvent& e) { return e.stage != stages[i]; });
+        EXPECT_THROW(reconstruct(ps, ReconstructParams::fromRadius(sp.radius), ctx), Cancelled)
+            << stages[i];
+        // The stage was entered and stopped: the stages after it never began.
+        EXPECT_TRUE(ctx.timing().has(stages[i])) << stages[i];
+        if (i + 1 < stages.size()) EXPECT_FALSE(ctx.timing().has(stages[i + 1])) << stages[i];
+    }
+    // The serial baseline checks too.
+    Context ctx;
+    ctx.setProgress([](const ProgressEvent& e) { return e.stage != "field"; });
+    Params scatter = Params::fromRadius(sp.radius);
+    scatter.method = FieldMethod::Scatter;
+    EXPECT_THROW(rasterizeParticles(ps, scatter, ctx), Cancelled);
+    EXPECT_FALSE(ctx.timing().has("level set"));
+}
+
+TEST(Reconstruct, CancelFromOutsideTheCallback)
+{
+    SceneParams sp;
+    sp.count = 5000;
+    Context ctx;
+    ctx.cancel();
+    EXPECT_THROW(reconstruct(generateScene(Scene::Ball, sp), ReconstructParams::fromRadius(0.025),
+                             ctx),
+                 Cancelled);
+    ctx.reset();
+    EXPECT_NO_THROW(reconstruct(generateScene(Scene::Ball, sp),
+                                ReconstructParams::fromRadius(0.025), ctx));
+}
+
+} // namespace
+} // namespace fluidsurf

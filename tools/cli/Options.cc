@@ -1,0 +1,203 @@
+// Options.cc - shared pipeline options, the report, Ctrl-C.
+#include "Options.h"
+
+#include <fluidsurf/Error.h>
+#include <fluidsurf/io/AtomicFile.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+
+namespace fluidsurf {
+namespace cli {
+
+namespace {
+std::atomic<bool> gInterrupted{false};
+
+extern "C" void onInterrupt(int)
+{
+    if (gInterrupted.exchange(true)) {
+        std::signal(SIGINT, SIG_DFL); // a second Ctrl-C: stop now
+        std::raise(SIGINT);
+    }
+}
+} // namespace
+
+void installInterruptHandler() { std::signal(SIGINT, onInterrupt); }
+bool interrupted() { return gInterrupted.load(); }
+
+void stopIfInterrupted(const Context& ctx)
+{
+    if (interrupted()) throw Cancelled("interrupted");
+    ctx.throwIfCancelled();
+}
+
+void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
+{
+    Params& f = o.params.field;
+    cmd->add_option("-r,--radius", o.params.radius,
+                    "particle radius r = half the rest spacing, world units "
+                    "(default: the radius attribute, else an estimate)");
+    auto rel = [&](const char* name, double& v, const char* text) {
+        cmd->add_option(name, v, text)->capture_default_str()->check(CLI::PositiveNumber);
+    };
+    rel("--voxel", f.voxelSize, "voxel (Marching Cubes cell) size, in r");
+    rel("--influence", f.influenceRadius, "influence radius R of the field kernel, in r");
+    rel("--smoothing-length", f.smoothingLength,
+        "SPH smoothing length h for neighbour counts, in r");
+    rel("--band", f.bandWidth,
+        "narrow band half width around surface particles, in r (at least 1 + voxel)");
+    rel("--half-width", f.halfWidth, "level-set background, in voxels");
+    cmd->add_option("--t-low", f.tLow, "SSP07 t_low")->capture_default_str();
+    cmd->add_option("--t-high", f.tHigh, "SSP07 t_high")->capture_default_str();
+    cmd->add_option("--surface-neighbours", f.surfaceNeighbours,
+                    "fewer neighbours within h: surface particle")
+        ->capture_default_str();
+    cmd->add_option("--splash-neighbours", f.splashNeighbours,
+                    "fewer neighbours within h: splash particle")
+        ->capture_default_str();
+    cmd->add_option("--color-field", f.colorFieldThreshold,
+                    "color field below this: surface particle")
+        ->capture_default_str();
+    cmd->add_option("--field", o.field, "ssp07 or zb05")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"ssp07", "zb05"}));
+    cmd->add_option("--method", o.method, "narrow-band, or the baselines gather-full and scatter")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"narrow-band", "gather-full", "scatter"}));
+    cmd->add_option("--device", o.device,
+                    "cpu, cuda (the narrow band on the GPU: sort, classify, band and gather; "
+                    "gather-full gathers there) or auto (cuda when a usable GPU is present)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+    cmd->add_flag("--ignore-radius-attribute", o.ignoreRadiusAttribute,
+                  "use r for every particle even with pscale");
+    cmd->add_flag("--keep-isolated", f.keepIsolated,
+                  "isolated particles become spheres of radius r in the grid");
+}
+
+void addRunOptions(CLI::App* cmd, PipelineOptions& o, bool meshing)
+{
+    if (meshing) {
+        cmd->add_option("--mesher", o.mesher,
+                        "mc (our marching cubes) or openvdb (OpenVDB's volumeToMesh)")
+            ->capture_default_str()
+            ->check(CLI::IsMember({"mc", "openvdb"}));
+        cmd->add_flag("--check", o.check,
+                      "check the mesh (boundary and non-manifold edges, orientation, ...) and "
+                      "print it");
+    }
+    cmd->add_option("-j,--threads", o.threads, "worker threads (default: all cores)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_flag("-q,--quiet", o.quiet, "no progress bar and no per-frame lines");
+    cmd->add_flag("-v,--verbose", o.verbose,
+                  "the timing tree of each frame (share of the total, peak memory)");
+    cmd->add_option("--stats", o.stats,
+                    "write every frame's timing tree and counts to this JSON file");
+}
+
+ReconstructParams PipelineOptions::resolved() const
+{
+    ReconstructParams p = params;
+    p.field.field = fieldFromName(field);
+    p.field.method = methodFromName(method);
+    p.field.perParticleRadii = !ignoreRadiusAttribute;
+    p.mesh.mesher = mesherFromName(mesher);
+    return p;
+}
+
+void PipelineOptions::setUp(Context& ctx) const
+{
+    ctx.setDevice(deviceFromName(device));
+    ctx.setThreads(threads);
+    ctx.setProgress([](const ProgressEvent&) { return !interrupted(); });
+}
+
+double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first)
+{
+    const RadiusChoice c = chooseRadius(first, o.params.radius, !o.ignoreRadiusAttribute);
+    if (!o.quiet && c.source == RadiusSource::Attribute)
+        std::printf("radius r = %g (%s)\n", c.radius, c.detail.c_str());
+    if (!o.quiet && c.source == RadiusSource::Estimated)
+        std::printf("radius r ~ %g (ESTIMATE: %s; pass -r with the simulator's radius)\n",
+                    c.radius, c.detail.c_str());
+    return c.radius;
+}
+
+std::vector<std::pair<std::string, double>> fieldCounts(const RasterizeStats& s)
+{
+    return {{"particles", double(s.particles)},
+            {"interior", double(s.interior)},
+            {"surface", double(s.surface)},
+            {"splash", double(s.splash)},
+            {"isolated", double(s.isolated)},
+            {"active_voxels", double(s.activeVoxels)},
+            {"leaves", double(s.leaves)},
+            {"field_evaluations", double(s.fieldEvaluations)},
+            {"band_completion", double(s.bandCompletion)},
+            {"band_half_width", s.bandWidth}};
+}
+
+std::vector<std::pair<std::string, double>> meshCounts(const MeshReport& r)
+{
+    return {{"vertices", double(r.vertices)},
+            {"triangles", double(r.triangles)},
+            {"boundary_edges", double(r.boundaryEdges)},
+            {"non_manifold_edges", double(r.nonManifoldEdges)},
+            {"components", double(r.components)},
+            {"volume", r.volume},
+            {"area", r.area}};
+}
+
+void Report::frame(const std::string& input, const Context& ctx,
+                   const std::vector<std::pair<std::string, double>>& counts,
+                   const RasterizeStats* field)
+{
+    if (mOptions.verbose) {
+        std::printf("%s", ctx.timing().format().c_str());
+        if (field) {
+            std::printf("  field on %s", field->device.c_str());
+            if (!field->gpuStages.empty()) {
+                std::printf(" (CUDA events:");
+                for (const StageTime& st : field->gpuStages)
+                    std::printf(" %s %.2f ms", st.name.c_str(), st.seconds * 1e3);
+                std::printf("; %.1f MiB of device memory)", double(field->gpuBytes) / (1 << 20));
+            }
+            std::printf("\n  field evaluations %zu (%zu of them completing the band)\n",
+                        field->fieldEvaluations, field->bandCompletion);
+        }
+        std::printf("  peak memory %.1f MiB\n", peakMemoryMiB());
+    }
+    if (mOptions.stats.empty()) return;
+    auto quoted = [](const std::string& text) {
+        std::string q = "\"";
+        for (const char c : text)
+            if (c == '"' || c == '\\') q += '\\', q += c;
+            else if (static_cast<unsigned char>(c) >= 0x20) q += c;
+        return q + "\"";
+    };
+    std::string json = "{\"input\": " + quoted(input) + ", \"counts\": {";
+    char num[64];
+    for (size_t i = 0; i < counts.size(); ++i) {
+        std::snprintf(num, sizeof(num), "%.17g", counts[i].second);
+        json += (i ? ", \"" : "\"") + counts[i].first + "\": " + num;
+    }
+    json += "}, \"device\": " + quoted(field ? field->device : "cpu");
+    json += ", \"timing\": " + ctx.timing().toJson() + "}";
+    mFrames.push_back(json);
+}
+
+void Report::finish() const
+{
+    if (mOptions.stats.empty()) return;
+    std::string json = "{\"frames\": [\n";
+    for (size_t i = 0; i < mFrames.size(); ++i)
+        json += (i ? ",\n" : "") + mFrames[i];
+    char peak[64];
+    std::snprintf(peak, sizeof(peak), "%.1f", peakMemoryMiB());
+    json += std::string("\n], \"peak_memory_mib\": ") + peak + "}\n";
+    io::writeFileAtomic(mOptions.stats, json.data(), json.size());
+}
+
+} // namespace cli
+} // namespace fluidsurf

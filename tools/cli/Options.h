@@ -1,0 +1,71 @@
+// Options.h - the options `rasterize`, `mesh` and `reconstruct` share, bound straight to the
+// library's ReconstructParams (lengths relative to r, as the library takes them), and what every
+// command does around its library call: the context (device, threads, Ctrl-C), the radius line,
+// the -v timing tree and the --stats JSON.
+#pragma once
+
+#include <fluidsurf/Context.h>
+#include <fluidsurf/MeshCheck.h>
+#include <fluidsurf/Reconstruct.h>
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+namespace cli {
+
+struct PipelineOptions
+{
+    ReconstructParams params; ///< params.field: lengths in r
+    std::string field = "ssp07", method = "narrow-band", device = "cpu", mesher = "mc";
+    bool ignoreRadiusAttribute = false;
+    int threads = 0;
+    bool quiet = false, verbose = false, check = false;
+    std::string stats; ///< --stats FILE.json
+
+    /// The params after parsing (enum names, radius attribute).
+    ReconstructParams resolved() const;
+    /// A context for these options: device, threads, and Ctrl-C as a clean stop.
+    void setUp(Context& ctx) const;
+};
+
+void addFieldOptions(CLI::App* cmd, PipelineOptions& o);
+/// -j, -q, -v, --stats (every pipeline command); --check and --mesher (the meshing ones).
+void addRunOptions(CLI::App* cmd, PipelineOptions& o, bool meshing);
+
+/// r for a sequence from its first frame, printed with its source (an estimate as "ESTIMATE").
+double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first);
+
+/// The per-frame report: -v prints the timing tree (and, after a rasterization, where the field
+/// ran); --stats collects every frame and is written at the end.
+class Report
+{
+public:
+    explicit Report(const PipelineOptions& o) : mOptions(o) {}
+    /// Call after ctx.timing().finish() for each frame; counts are name -> value.
+    void frame(const std::string& input, const Context& ctx,
+               const std::vector<std::pair<std::string, double>>& counts,
+               const RasterizeStats* field = nullptr);
+    /// Writes --stats (atomically) when given.
+    void finish() const;
+
+private:
+    const PipelineOptions& mOptions;
+    std::vector<std::string> mFrames; ///< JSON objects
+};
+
+/// Counts for the report.
+std::vector<std::pair<std::string, double>> fieldCounts(const RasterizeStats& s);
+std::vector<std::pair<std::string, double>> meshCounts(const MeshReport& r);
+
+/// Ctrl-C (SIGINT) asks every context set up by PipelineOptions to stop; a second Ctrl-C ends
+/// the process at once.
+void installInterruptHandler();
+bool interrupted();
+/// Between stages and frames: Cancelled when ctx was stopped or Ctrl-C came.
+void stopIfInterrupted(const Context& ctx);
+
+} // namespace cli
+} // namespace fluidsurf
