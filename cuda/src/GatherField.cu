@@ -1,6 +1,6 @@
 // GatherField.cu - the SSP07 / ZB05 gather on the GPU, one block per VDB leaf (see
-// fluidsurf/cuda/FieldGather.h). The finish from sums to phi is lib/src/field/FieldMath.h, the
-// same code the CPU runs.
+// facade/FieldGather.h). The finish from sums to phi is lib/src/field/FieldMath.h, the same code
+// the CPU runs. Deterministic: every run sums each voxel's particles in the same order.
 #include "facade/FieldGather.h"
 
 #include "Stages.cuh"
@@ -14,6 +14,7 @@ constexpr int kThreads = 256; // 2 voxels of the 8^3 leaf per thread
 constexpr int kVoxelsPerThread = 512 / kThreads;
 constexpr int kTile = 256;      // particles staged in shared memory at a time
 constexpr int kCellChunk = 512; // occupied-cell lookups per pass
+static_assert(kCellChunk % kThreads == 0 && kThreads % 32 == 0, "whole warps, whole rounds");
 
 struct Params
 {
@@ -37,6 +38,7 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
     __shared__ uint32_t cellBegin[kCellChunk], cellPrefix[kCellChunk + 1];
     __shared__ float4 tile[kTile];
     __shared__ int cellsInChunk;
+    __shared__ int warpFound[kThreads / 32];
 
     const int leaf = blockIdx.x;
     const int3 origin = make_int3(p.leafOrigins[3 * leaf], p.leafOrigins[3 * leaf + 1],
@@ -67,19 +69,34 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
     for (long long chunk = 0; chunk < boxCells; chunk += kCellChunk) {
         if (threadIdx.x == 0) cellsInChunk = 0;
         __syncthreads();
-        // Each thread looks up a few cells of the chunk; the found ones are appended (their
-        // order does not matter for correctness, only for the last bits of the sums).
-        for (long long c = chunk + threadIdx.x; c < chunk + kCellChunk && c < boxCells;
-             c += kThreads) {
-            const long long cx = c0[0] + c % nx, cy = c0[1] + (c / nx) % ny,
-                            cz = c0[2] + c / (nx * ny);
-            const long long at = findCell(p.cells, cx, cy, cz);
-            if (at < 0) continue;
-            const int slot = atomicAdd(&cellsInChunk, 1);
-            cellBegin[slot] = p.cells.starts[at];
-            cellPrefix[slot + 1] = p.cells.starts[at + 1] - p.cells.starts[at];
+        // The occupied cells of the chunk, compacted in candidate order (warp ballots and the
+        // warps' counts): the particles are summed in the same order on every run, so the
+        // values, and the files written from them, are reproducible bit for bit.
+        for (int round = 0; round < kCellChunk / kThreads; ++round) {
+            const long long c = chunk + round * kThreads + threadIdx.x;
+            long long at = -1;
+            if (c < boxCells) {
+                const long long cx = c0[0] + c % nx, cy = c0[1] + (c / nx) % ny,
+                                cz = c0[2] + c / (nx * ny);
+                at = findCell(p.cells, cx, cy, cz);
+            }
+            const unsigned found = __ballot_sync(0xffffffffu, at >= 0);
+            const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+            if (lane == 0) warpFound[warp] = __popc(found);
+            __syncthreads();
+            int slot = cellsInChunk + __popc(found & ((1u << lane) - 1u));
+            for (int w = 0; w < warp; ++w)
+                slot += warpFound[w];
+            if (at >= 0) {
+                cellBegin[slot] = p.cells.starts[at];
+                cellPrefix[slot + 1] = p.cells.starts[at + 1] - p.cells.starts[at];
+            }
+            __syncthreads();
+            if (threadIdx.x == 0)
+                for (int w = 0; w < kThreads / 32; ++w)
+                    cellsInChunk += warpFound[w];
+            __syncthreads();
         }
-        __syncthreads();
         const int cells = cellsInChunk;
         if (threadIdx.x == 0) {
             cellPrefix[0] = 0;

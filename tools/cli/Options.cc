@@ -23,8 +23,14 @@ extern "C" void onInterrupt(int)
 }
 } // namespace
 
-void installInterruptHandler() { std::signal(SIGINT, onInterrupt); }
-bool interrupted() { return gInterrupted.load(); }
+void installInterruptHandler()
+{
+    std::signal(SIGINT, onInterrupt);
+}
+bool interrupted()
+{
+    return gInterrupted.load();
+}
 
 void stopIfInterrupted(const Context& ctx)
 {
@@ -119,8 +125,8 @@ double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first)
     if (!o.quiet && c.source == RadiusSource::Attribute)
         std::printf("radius r = %g (%s)\n", c.radius, c.detail.c_str());
     if (!o.quiet && c.source == RadiusSource::Estimated)
-        std::printf("radius r ~ %g (ESTIMATE: %s; pass -r with the simulator's radius)\n",
-                    c.radius, c.detail.c_str());
+        std::printf("radius r ~ %g (ESTIMATE: %s; pass -r with the simulator's radius)\n", c.radius,
+                    c.detail.c_str());
     return c.radius;
 }
 
@@ -172,8 +178,10 @@ void Report::frame(const std::string& input, const Context& ctx,
     auto quoted = [](const std::string& text) {
         std::string q = "\"";
         for (const char c : text)
-            if (c == '"' || c == '\\') q += '\\', q += c;
-            else if (static_cast<unsigned char>(c) >= 0x20) q += c;
+            if (c == '"' || c == '\\')
+                q += '\\', q += c;
+            else if (static_cast<unsigned char>(c) >= 0x20)
+                q += c;
         return q + "\"";
     };
     std::string json = "{\"input\": " + quoted(input) + ", \"counts\": {";

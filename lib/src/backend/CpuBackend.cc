@@ -16,10 +16,9 @@ Classified classifyOnCpu(const Particles& particles, const Params& params, Conte
     {
         const auto t = ctx.scope("neighbors");
         const double cellSize = std::min(params.influenceRadius, params.smoothingLength);
-        c.index = neighbors::buildCellIndex(particles.positions.data(),
-                                            particles.radii.empty() ? nullptr
-                                                                    : particles.radii.data(),
-                                            particles.positions.size(), cellSize, ctx);
+        c.index = neighbors::buildCellIndex(
+            particles.positions.data(), particles.radii.empty() ? nullptr : particles.radii.data(),
+            particles.positions.size(), cellSize, ctx);
     }
     const auto t = ctx.scope("classify");
     c.classes = classify::classifyParticles(c.index, params, ctx);
@@ -58,8 +57,8 @@ public:
             const auto t = ctx.scope("narrow band");
             const openvdb::MaskTree::Ptr band =
                 narrowband::buildNarrowBand(c.index, c.classes, params, level, width, ctx);
-            out.tree = std::make_shared<openvdb::FloatTree>(
-                *band, float(params.background(level)), openvdb::TopologyCopy());
+            out.tree = std::make_shared<openvdb::FloatTree>(*band, float(params.background(level)),
+                                                            openvdb::TopologyCopy());
         }
         const auto t = ctx.scope("field");
         mOwned = fieldParticles(std::move(c), params);
@@ -84,7 +83,10 @@ private:
 
 } // namespace
 
-std::unique_ptr<Backend> makeCpuBackend() { return std::make_unique<CpuBackend>(); }
+std::unique_ptr<Backend> makeCpuBackend()
+{
+    return std::make_unique<CpuBackend>();
+}
 
 } // namespace backend
 } // namespace fluidsurf

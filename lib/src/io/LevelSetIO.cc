@@ -91,7 +91,6 @@ void writeLevelSet(const openvdb::GridPtrVec& grids, const std::string& path)
     out.commit();
 }
 
-
 std::vector<GridDescription> describeVdb(const std::string& path)
 {
     const std::vector<uint8_t> bytes = io_internal::readFile(path);

@@ -71,11 +71,11 @@ enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64
 PlyType plyType(const ByteReader& in, const std::string& name)
 {
     static const std::pair<const char*, PlyType> names[] = {
-        {"char", PlyType::Int8},     {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
-        {"uint8", PlyType::UInt8},   {"short", PlyType::Int16},     {"int16", PlyType::Int16},
-        {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
-        {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
-        {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+        {"char", PlyType::Int8},      {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
+        {"uint8", PlyType::UInt8},    {"short", PlyType::Int16},     {"int16", PlyType::Int16},
+        {"ushort", PlyType::UInt16},  {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
+        {"int32", PlyType::Int32},    {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
+        {"float", PlyType::Float32},  {"float32", PlyType::Float32}, {"double", PlyType::Float64},
         {"float64", PlyType::Float64}};
     for (const auto& n : names)
         if (name == n.first) return n.second;
@@ -86,11 +86,15 @@ size_t plySize(PlyType t)
 {
     switch (t) {
     case PlyType::Int8:
-    case PlyType::UInt8: return 1;
+    case PlyType::UInt8:
+        return 1;
     case PlyType::Int16:
-    case PlyType::UInt16: return 2;
-    case PlyType::Float64: return 8;
-    default: return 4;
+    case PlyType::UInt16:
+        return 2;
+    case PlyType::Float64:
+        return 8;
+    default:
+        return 4;
     }
 }
 
@@ -115,14 +119,22 @@ double plyValue(ByteReader& in, PlyType t, int format)
     if (format == 0) return io_internal::readAsciiNumber(in, "PLY data");
     const bool big = format == 2;
     switch (t) {
-    case PlyType::Int8: return in.read<int8_t>(big, "PLY data");
-    case PlyType::UInt8: return in.read<uint8_t>(big, "PLY data");
-    case PlyType::Int16: return in.read<int16_t>(big, "PLY data");
-    case PlyType::UInt16: return in.read<uint16_t>(big, "PLY data");
-    case PlyType::Int32: return in.read<int32_t>(big, "PLY data");
-    case PlyType::UInt32: return in.read<uint32_t>(big, "PLY data");
-    case PlyType::Float32: return in.read<float>(big, "PLY data");
-    case PlyType::Float64: return in.read<double>(big, "PLY data");
+    case PlyType::Int8:
+        return in.read<int8_t>(big, "PLY data");
+    case PlyType::UInt8:
+        return in.read<uint8_t>(big, "PLY data");
+    case PlyType::Int16:
+        return in.read<int16_t>(big, "PLY data");
+    case PlyType::UInt16:
+        return in.read<uint16_t>(big, "PLY data");
+    case PlyType::Int32:
+        return in.read<int32_t>(big, "PLY data");
+    case PlyType::UInt32:
+        return in.read<uint32_t>(big, "PLY data");
+    case PlyType::Float32:
+        return in.read<float>(big, "PLY data");
+    case PlyType::Float64:
+        return in.read<double>(big, "PLY data");
     }
     return 0;
 }
@@ -138,7 +150,7 @@ TriangleMesh readPly(const std::vector<uint8_t>& bytes, const std::string& path)
         if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
         if (w[0] == "end_header") break;
         if (w[0] == "format" && w.size() >= 2) {
-            format = w[1] == "ascii" ? 0
+            format = w[1] == "ascii"                  ? 0
                      : w[1] == "binary_little_endian" ? 1
                      : w[1] == "binary_big_endian"    ? 2
                                                       : -1;
@@ -233,8 +245,10 @@ TriangleMesh readMesh(const std::string& path)
 {
     const std::vector<uint8_t> bytes = io_internal::readFile(path);
     switch (meshFormatFromPath(path)) {
-    case MeshFormat::Obj: return readObj(bytes, path);
-    case MeshFormat::Ply: return readPly(bytes, path);
+    case MeshFormat::Obj:
+        return readObj(bytes, path);
+    case MeshFormat::Ply:
+        return readPly(bytes, path);
     default:
         throw InputError(path + ": cannot read this mesh type (readable: .obj .ply; .vtk meshes "
                                 "are written only)");

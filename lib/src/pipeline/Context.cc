@@ -20,12 +20,14 @@ std::string jsonString(const std::string& s)
 {
     std::string out = "\"";
     for (const char c : s) {
-        if (c == '"' || c == '\\') out += '\\', out += c;
+        if (c == '"' || c == '\\')
+            out += '\\', out += c;
         else if (static_cast<unsigned char>(c) < 0x20) {
             char buf[8];
             std::snprintf(buf, sizeof(buf), "\\u%04x", c);
             out += buf;
-        } else out += c;
+        } else
+            out += c;
     }
     return out + "\"";
 }
@@ -53,7 +55,10 @@ Device deviceFromName(const std::string& name)
 
 // --- TimingTree ----------------------------------------------------------------------------
 
-TimingTree::TimingTree() { clear(); }
+TimingTree::TimingTree()
+{
+    clear();
+}
 
 void TimingTree::clear()
 {
@@ -124,7 +129,8 @@ std::string TimingTree::format() const
         std::snprintf(line, sizeof(line), "  %-28s %9.4f s %6.1f%%  %8.1f MiB\n", label.c_str(),
                       n.seconds, 100 * n.seconds / total, n.peakMiB);
         out += line;
-        for (size_t c : n.children) print(c, depth + 1);
+        for (size_t c : n.children)
+            print(c, depth + 1);
     };
     std::snprintf(line, sizeof(line), "  %-28s %11s %7s  %12s\n", "stage", "time", "share",
                   "peak memory");

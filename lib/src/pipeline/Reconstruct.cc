@@ -31,9 +31,12 @@ Params ReconstructParams::fieldParams(double r) const
 const char* radiusSourceName(RadiusSource s)
 {
     switch (s) {
-    case RadiusSource::Given: return "given";
-    case RadiusSource::Attribute: return "attribute";
-    case RadiusSource::Estimated: return "estimate";
+    case RadiusSource::Given:
+        return "given";
+    case RadiusSource::Attribute:
+        return "attribute";
+    case RadiusSource::Estimated:
+        return "estimate";
     }
     return "?";
 }

@@ -102,10 +102,11 @@ TEST(MeshReader, PolygonsAndNegativeIndices)
 {
     const test::TempDir dir;
     // A unit cube: 6 quads, half of them with negative (relative) indices.
-    test::writeFile(dir.path("cube.obj"), "# cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
-                                          "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
-                                          "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\n"
-                                          "f -6 -5 -1 -2\nf 2/1 3/2 7/3 6/4\nf 1//1 5//1 8//1 4//1\n");
+    test::writeFile(dir.path("cube.obj"),
+                    "# cube\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                    "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                    "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\n"
+                    "f -6 -5 -1 -2\nf 2/1 3/2 7/3 6/4\nf 1//1 5//1 8//1 4//1\n");
     const TriangleMesh m = io::readMesh(dir.path("cube.obj"));
     EXPECT_EQ(m.points.size(), 8u);
     EXPECT_EQ(m.triangles.size(), 12u);

@@ -115,7 +115,7 @@ TEST(Reconstruct, TimingTreeNestsTheStages)
     double sum = 0;
     for (size_t c : nodes[t.root().children[0]].children)
         inner.push_back(nodes[c].name), sum += nodes[c].seconds;
-    const std::vector<std::string> expected{"neighbors", "classify", "narrow band",
+    const std::vector<std::string> expected{"neighbors", "classify",      "narrow band",
                                             "field",     "complete band", "level set"};
     EXPECT_EQ(inner, expected);
     EXPECT_LE(sum, nodes[t.root().children[0]].seconds);
@@ -177,8 +177,8 @@ TEST(Reconstruct, EveryParallelStageChecksForCancel)
     SceneParams sp;
     sp.count = 30000;
     const ParticleSet ps = generateScene(Scene::Drop, sp);
-    const std::vector<std::string> stages{"neighbors", "classify", "narrow band", "field",
-                                          "complete band", "mesh"};
+    const std::vector<std::string> stages{"neighbors", "classify",      "narrow band",
+                                          "field",     "complete band", "mesh"};
     for (size_t i = 0; i < stages.size(); ++i) {
         Context ctx;
         ctx.setProgress([&](const ProgressEvent& e) { return e.stage != stages[i]; });
@@ -203,12 +203,12 @@ TEST(Reconstruct, CancelFromOutsideTheCallback)
     sp.count = 5000;
     Context ctx;
     ctx.cancel();
-    EXPECT_THROW(reconstruct(generateScene(Scene::Ball, sp), ReconstructParams::fromRadius(0.025),
-                             ctx),
-                 Cancelled);
+    EXPECT_THROW(
+        reconstruct(generateScene(Scene::Ball, sp), ReconstructParams::fromRadius(0.025), ctx),
+        Cancelled);
     ctx.reset();
-    EXPECT_NO_THROW(reconstruct(generateScene(Scene::Ball, sp),
-                                ReconstructParams::fromRadius(0.025), ctx));
+    EXPECT_NO_THROW(
+        reconstruct(generateScene(Scene::Ball, sp), ReconstructParams::fromRadius(0.025), ctx));
 }
 
 } // namespace

@@ -26,9 +26,9 @@ struct GridDescription
     double voxelSize[3] = {0, 0, 0};
     bool linear = true; ///< a linear (affine) transform, not a frustum
     uint64_t activeVoxels = 0, leaves = 0;
-    int64_t bboxMin[3] = {0, 0, 0}, bboxMax[3] = {0, 0, 0}; ///< active voxels, index space
-    bool empty = true;                                     ///< no active voxel
-    std::string background;                                ///< as text
+    int64_t bboxMin[3] = {0, 0, 0}, bboxMax[3] = {0, 0, 0};    ///< active voxels, index space
+    bool empty = true;                                         ///< no active voxel
+    std::string background;                                    ///< as text
     std::vector<std::pair<std::string, std::string>> metadata; ///< name, value as text
 };
 
