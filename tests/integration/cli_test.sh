@@ -8,20 +8,7 @@ BIN=$1
 SHARED=${2:-../shared/data}
 T=$(mktemp -d /tmp/fluidsurf_cli_XXXXXX)
 trap 'rm -rf "$T"' EXIT
-pass=0; fail=0
-ok()   { pass=$((pass + 1)); }
-bad()  { fail=$((fail + 1)); echo "FAIL: $*" >&2; }
-check() { local what=$1; shift; if "$@"; then ok; else bad "$what"; fi; }
-# expect_error WHAT PATTERN CMD...: non-zero exit, one 'fluidsurf: error:' line matching PATTERN
-expect_error() {
-    local what=$1 pattern=$2; shift 2
-    local out rc
-    out=$("$@" 2>&1 >/dev/null); rc=$?
-    if [ $rc -eq 0 ]; then bad "$what: exit code 0"; return; fi
-    if ! grep -q -- "$pattern" <<<"$out"; then bad "$what: message '$out' lacks '$pattern'"; return; fi
-    if [ "$(grep -c 'fluidsurf: error:' <<<"$out")" -ne 1 ]; then bad "$what: not exactly one error line: $out"; return; fi
-    ok
-}
+source "$(dirname "$0")/checks.sh"
 
 # --- help and version ---------------------------------------------------------------------
 check "--help shows examples" bash -c "'$BIN' --help | grep -q 'Examples:'"

@@ -1,4 +1,6 @@
-// Context.cc - the timing tree, checkpoints and device names.
+// Context.cc - the timing tree, checkpoints and device names: what every stage receives beside
+// its data (fluidsurf/Context.h). Below every stage, so stages depend on it and never on the
+// pipeline that runs them.
 #include <fluidsurf/Context.h>
 
 #include <sys/resource.h>
