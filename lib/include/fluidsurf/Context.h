@@ -125,7 +125,8 @@ public:
     void checkpoint();
     /// Throws Cancelled when a stop was asked for (between stages, on the calling thread).
     void throwIfCancelled() const;
-    /// Ranges that passed their checkpoint (and ran) since the context was made or reset().
+    /// Ranges that passed their checkpoint (and ran) while a progress callback was set, since the
+    /// context was made or reset().
     size_t rangesBegun() const { return mRanges.load(); }
     /// Clear the cancel flag and the range count (the timing tree is cleared separately).
     void reset();
