@@ -64,7 +64,8 @@ cuda::FieldSettings fieldSettings(const Params& params, const Level& level)
 }
 
 /// A tree from leaf blocks: leaves built in parallel, then linked in (cheap, serial).
-openvdb::FloatTree::Ptr treeFromBlocks(const cuda::LeafBlocks& blocks, float background)
+openvdb::FloatTree::Ptr treeFromBlocks(const cuda::LeafBlocks& blocks, float background,
+                                       Context& ctx)
 {
     const size_t n = blocks.size();
     // Where each leaf's active values start in the compact array.
@@ -77,13 +78,14 @@ openvdb::FloatTree::Ptr treeFromBlocks(const cuda::LeafBlocks& blocks, float bac
     }
     if (offsets[n] != blocks.values.size())
         throw Error("CUDA pipeline: leaf blocks and values disagree");
-    std::vector<LeafT*> built(n);
+    std::vector<std::unique_ptr<LeafT>> built(n); // freed if a cancel stops the loop
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
+            ctx.checkpoint();
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 const openvdb::Coord origin(blocks.origins[3 * i], blocks.origins[3 * i + 1],
                                             blocks.origins[3 * i + 2]);
-                auto* leaf = new LeafT(origin, background);
+                auto leaf = std::make_unique<LeafT>(origin, background);
                 float* buffer = leaf->buffer().data();
                 LeafT::NodeMaskType mask;
                 const float* value = &blocks.values[offsets[i]];
@@ -94,12 +96,12 @@ openvdb::FloatTree::Ptr treeFromBlocks(const cuda::LeafBlocks& blocks, float bac
                         buffer[64 * w + __builtin_ctzll(bits)] = *value++;
                 }
                 leaf->setValueMask(mask);
-                built[i] = leaf;
+                built[i] = std::move(leaf);
             }
         });
     auto tree = std::make_shared<openvdb::FloatTree>(background);
-    for (LeafT* leaf : built)
-        tree->addLeaf(leaf); // the tree takes ownership
+    for (std::unique_ptr<LeafT>& leaf : built)
+        tree->addLeaf(leaf.release()); // the tree takes ownership
     return tree;
 }
 
@@ -166,7 +168,7 @@ public:
         if (!params.keepIsolated) out.isolatedParticles = pipeline->isolatedParticles();
         {
             const auto t = ctx.scope("vdb build");
-            out.tree = treeFromBlocks(blocks, s.field.background);
+            out.tree = treeFromBlocks(blocks, s.field.background, ctx);
         }
         out.evaluations = out.tree->activeVoxelCount();
         mPipeline = std::move(pipeline);

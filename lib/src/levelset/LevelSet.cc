@@ -15,10 +15,11 @@ namespace fluidsurf {
 namespace levelset {
 
 namespace {
-void deactivateOutsideBand(openvdb::FloatTree& tree, float background)
+void deactivateOutsideBand(openvdb::FloatTree& tree, float background, Context& ctx)
 {
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
-    leaves.foreach ([background](openvdb::FloatTree::LeafNodeType& leaf, size_t) {
+    leaves.foreach ([background, &ctx](openvdb::FloatTree::LeafNodeType& leaf, size_t i) {
+        if (i % 64 == 0) ctx.checkpoint();
         for (auto v = leaf.beginValueOn(); v; ++v)
             if (std::abs(*v) >= background) v.setValueOff();
     });
@@ -26,10 +27,11 @@ void deactivateOutsideBand(openvdb::FloatTree& tree, float background)
 } // namespace
 
 openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Params& params,
-                                       const Level& level, bool keepOnlyBand, const GridInfo& info)
+                                       const Level& level, bool keepOnlyBand, const GridInfo& info,
+                                       Context& ctx)
 {
     const float background = float(params.background(level));
-    if (keepOnlyBand) deactivateOutsideBand(*tree, background);
+    if (keepOnlyBand) deactivateOutsideBand(*tree, background, ctx);
     openvdb::tools::signedFloodFill(*tree);
     openvdb::tools::pruneLevelSet(*tree);
     auto grid = openvdb::FloatGrid::create(tree);

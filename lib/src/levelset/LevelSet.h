@@ -3,6 +3,7 @@
 // io/LevelSetIO.h's work.
 #pragma once
 
+#include <fluidsurf/Context.h>
 #include <fluidsurf/Level.h>
 #include <fluidsurf/Params.h>
 
@@ -21,9 +22,11 @@ struct GridInfo
 
 /// Turn a tree of clamped field values into the "surface" level-set grid. With
 /// keepOnlyBand, voxels whose |phi| reached the background are deactivated first (the
-/// volume methods activate every vertex; the narrow band keeps its band).
+/// volume methods activate every vertex; the narrow band keeps its band; ctx.checkpoint() every
+/// 64 leaves). Sign flood fill and pruning are OpenVDB's, without an interrupter.
 openvdb::FloatGrid::Ptr finishLevelSet(openvdb::FloatTree::Ptr tree, const Params& params,
-                                       const Level& level, bool keepOnlyBand, const GridInfo& info);
+                                       const Level& level, bool keepOnlyBand, const GridInfo& info,
+                                       Context& ctx);
 
 } // namespace levelset
 } // namespace fluidsurf

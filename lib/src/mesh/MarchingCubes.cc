@@ -436,7 +436,7 @@ struct Passes
 };
 
 /// Drop vertices no triangle uses and renumber (order kept).
-void dropUnusedVertices(TriangleMesh& mesh)
+void dropUnusedVertices(TriangleMesh& mesh, Context& ctx)
 {
     std::vector<uint32_t> map(mesh.points.size(), 0);
     for (const auto& t : mesh.triangles)
@@ -451,6 +451,7 @@ void dropUnusedVertices(TriangleMesh& mesh)
     mesh.points.resize(n), mesh.normals.resize(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.triangles.size(), 4096),
                       [&](const tbb::blocked_range<size_t>& r) {
+                          ctx.checkpoint();
                           for (size_t i = r.begin(); i != r.end(); ++i)
                               for (uint32_t& v : mesh.triangles[i])
                                   v = map[v];
@@ -497,7 +498,7 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
         mesh.points.insert(mesh.points.end(), l.points.begin(), l.points.end());
         mesh.normals.insert(mesh.normals.end(), l.normals.begin(), l.normals.end());
     }
-    dropUnusedVertices(mesh);
+    dropUnusedVertices(mesh, ctx);
     if (surfaceCells) *surfaceCells = cells;
     return mesh;
 }

@@ -147,7 +147,7 @@ RasterizeResult rasterize(const ParticleSet& ps, const Params& params, Context& 
     info.isolated = result.isolatedParticles.size();
     info.source = source;
     result.grid = levelset::finishLevelSet(tree, params, level,
-                                           params.method != FieldMethod::NarrowBand, info);
+                                           params.method != FieldMethod::NarrowBand, info, ctx);
     stats.activeVoxels = result.grid->activeVoxelCount();
     stats.leaves = result.grid->tree().leafCount();
     return result;
