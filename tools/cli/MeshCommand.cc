@@ -99,7 +99,7 @@ Runner addMeshCommand(CLI::App& app)
         const auto jobs = planMeshJobs(*o);
         const Mesher mesher = mesherFromName(po.mesher);
         Context ctx;
-        po.setUp(ctx);
+        const auto threadLimit = po.setUp(ctx);
         Progress bar(jobs.size(), "mesh", po.quiet);
         Report report(po);
         for (size_t i = 0; i < jobs.size(); ++i) {
@@ -149,7 +149,7 @@ Runner addReconstructCommand(CLI::App& app)
         if (!o->vdb.empty()) vdbJobs = planVdbFrames(o->input, o->vdb, o->frames, "--vdb");
         ReconstructParams params = po.resolved();
         Context ctx;
-        po.setUp(ctx);
+        const auto threadLimit = po.setUp(ctx);
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
         prepareDevice(ctx.device());

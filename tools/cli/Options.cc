@@ -112,11 +112,14 @@ ReconstructParams PipelineOptions::resolved() const
     return p;
 }
 
-void PipelineOptions::setUp(Context& ctx) const
+std::unique_ptr<tbb::global_control> PipelineOptions::setUp(Context& ctx) const
 {
     ctx.setDevice(deviceFromName(device));
     ctx.setThreads(threads);
     ctx.setProgress([](const ProgressEvent&) { return !interrupted(); });
+    if (threads <= 0) return nullptr;
+    return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                 size_t(threads));
 }
 
 double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first)

@@ -9,6 +9,9 @@
 #include <fluidsurf/Reconstruct.h>
 
 #include <CLI/CLI.hpp>
+#include <tbb/global_control.h>
+
+#include <memory>
 
 #include <string>
 #include <vector>
@@ -27,8 +30,9 @@ struct PipelineOptions
 
     /// The params after parsing (enum names, radius attribute).
     ReconstructParams resolved() const;
-    /// A context for these options: device, threads, and Ctrl-C as a clean stop.
-    void setUp(Context& ctx) const;
+    /// A context for these options: device, threads, and Ctrl-C as a clean stop. The returned
+    /// object holds -j for the whole process while it lives (file writing included).
+    std::unique_ptr<tbb::global_control> setUp(Context& ctx) const;
 };
 
 void addFieldOptions(CLI::App* cmd, PipelineOptions& o);

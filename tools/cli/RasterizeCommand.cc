@@ -51,7 +51,7 @@ Runner addRasterizeCommand(CLI::App& app)
         const auto jobs = planVdbFrames(o->input, o->output, o->frames, "output");
         ReconstructParams params = po.resolved();
         Context ctx;
-        po.setUp(ctx);
+        const auto threadLimit = po.setUp(ctx);
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
         prepareDevice(ctx.device());
