@@ -2,7 +2,10 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/Params.h>
 
+#include <openvdb/Exceptions.h>
+
 #include <cmath>
+#include <cstdio>
 
 namespace fluidsurf {
 
@@ -30,6 +33,18 @@ void Params::validate() const
 {
     requirePositive(radius, "particle radius");
     requirePositive(voxelSize, "voxel size");
+    // OpenVDB refuses a transform whose scale determinant is within its tolerance of zero
+    // (voxels below about 1.2e-5 world units): say so before any work, in our words.
+    try {
+        (void)level().transform();
+    } catch (const openvdb::Exception&) {
+        char text[160];
+        std::snprintf(text, sizeof(text),
+                      "voxel size %g is too small for an OpenVDB grid (it needs about 2e-5 world "
+                      "units or more); scale the particle positions up (e.g. to millimetres)",
+                      voxelSize);
+        throw ValueError(text);
+    }
     requirePositive(influenceRadius, "influence radius R");
     requirePositive(smoothingLength, "smoothing length h");
     requirePositive(bandWidth, "band width");

@@ -38,6 +38,7 @@ Runner addConvertCommand(CLI::App& app)
                 "  fluidsurf convert 'sim/f_####.bgeo' 'out/f_####.ply' --frames 1-100");
     return [o]() {
         const auto jobs = planFrames(o->input, o->output, o->frames);
+        refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
         io::WriteOptions wo;

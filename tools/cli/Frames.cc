@@ -3,6 +3,12 @@
 
 #include <fluidsurf/Error.h>
 
+#include <sys/stat.h>
+
+#include <climits>
+#include <cstdlib>
+#include <map>
+
 namespace fluidsurf {
 namespace cli {
 
@@ -41,6 +47,59 @@ std::vector<FrameJob> planVdbFrames(const std::string& input, const std::string&
             throw ValueError(what + " '" + out + "' must end in .vdb");
     }
     return jobs;
+}
+
+namespace {
+/// The file a path names: "dev:inode" when it exists, else the real path of its folder plus its
+/// name (an output that does not exist yet can only collide with another output).
+std::string fileKey(const std::string& path)
+{
+    struct stat st;
+    if (::stat(path.c_str(), &st) == 0)
+        return std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+    const size_t slash = path.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash + 1);
+    const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+    char resolved[PATH_MAX];
+    if (::realpath(dir.c_str(), resolved)) return std::string(resolved) + "/" + name;
+    return path;
+}
+} // namespace
+
+void refuseOverwritingInputs(const std::vector<std::string>& inputs,
+                             const std::vector<std::string>& outputs)
+{
+    std::map<std::string, std::string> files;
+    for (const std::string& in : inputs)
+        files.emplace(fileKey(in), in);
+    std::map<std::string, std::string> written;
+    for (const std::string& out : outputs) {
+        const std::string key = fileKey(out);
+        const auto input = files.find(key);
+        if (input != files.end())
+            throw ValueError("output '" + out + "' is the input '" + input->second +
+                             "' of this run; refusing to overwrite an input");
+        const auto other = written.emplace(key, out);
+        if (!other.second)
+            throw ValueError("outputs '" + other.first->second + "' and '" + out +
+                             "' are the same file");
+    }
+}
+
+std::vector<std::string> inputsOf(const std::vector<FrameJob>& jobs)
+{
+    std::vector<std::string> v;
+    for (const FrameJob& j : jobs)
+        v.push_back(j.input);
+    return v;
+}
+
+std::vector<std::string> outputsOf(const std::vector<FrameJob>& jobs)
+{
+    std::vector<std::string> v;
+    for (const FrameJob& j : jobs)
+        v.push_back(j.output);
+    return v;
 }
 
 } // namespace cli

@@ -25,5 +25,15 @@ std::vector<FrameJob> planFrames(const std::string& input, const std::string& ou
 std::vector<FrameJob> planVdbFrames(const std::string& input, const std::string& output,
                                     const std::string& range, const std::string& what);
 
+/// ValueError, before any work, when an output path of the run is one of its inputs (the same
+/// file by device and inode, or by real path for outputs that do not exist yet; every frame of
+/// a sequence against every input frame), or when two outputs are the same file. Naming both.
+void refuseOverwritingInputs(const std::vector<std::string>& inputs,
+                             const std::vector<std::string>& outputs);
+
+/// The inputs and outputs of frame jobs, for refuseOverwritingInputs.
+std::vector<std::string> inputsOf(const std::vector<FrameJob>& jobs);
+std::vector<std::string> outputsOf(const std::vector<FrameJob>& jobs);
+
 } // namespace cli
 } // namespace fluidsurf

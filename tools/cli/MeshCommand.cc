@@ -97,6 +97,7 @@ Runner addMeshCommand(CLI::App& app)
     return [o]() {
         const PipelineOptions& po = o->pipeline;
         const auto jobs = planMeshJobs(*o);
+        refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
         const Mesher mesher = mesherFromName(po.mesher);
         Context ctx;
         const auto threadLimit = po.setUp(ctx);
@@ -147,6 +148,9 @@ Runner addReconstructCommand(CLI::App& app)
         auto jobs = planMeshJobs(*o);
         std::vector<FrameJob> vdbJobs;
         if (!o->vdb.empty()) vdbJobs = planVdbFrames(o->input, o->vdb, o->frames, "--vdb");
+        std::vector<std::string> outputs = outputsOf(jobs), vdbOutputs = outputsOf(vdbJobs);
+        outputs.insert(outputs.end(), vdbOutputs.begin(), vdbOutputs.end());
+        refuseOverwritingInputs(inputsOf(jobs), outputs);
         ReconstructParams params = po.resolved();
         Context ctx;
         const auto threadLimit = po.setUp(ctx);
@@ -177,6 +181,7 @@ Runner addReconstructCommand(CLI::App& app)
                             jobs[i].input.c_str(), res.field.isolated,
                             params.field.keepIsolated ? "kept as spheres" : "left out",
                             ri.droppedNonFinite);
+            warnIfEmpty(jobs[i].input, ps, res.field, params.radius, res.mesh.empty());
             std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
             counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
             writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, counts, &res.field);

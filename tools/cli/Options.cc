@@ -2,9 +2,11 @@
 #include "Options.h"
 
 #include <fluidsurf/Error.h>
+#include <fluidsurf/SpacingEstimate.h>
 #include <fluidsurf/io/AtomicFile.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 
@@ -13,12 +15,14 @@ namespace cli {
 
 namespace {
 std::atomic<bool> gInterrupted{false};
+std::atomic<int> gSignal{0};
 
-extern "C" void onInterrupt(int)
+extern "C" void onInterrupt(int signal)
 {
+    gSignal.store(signal);
     if (gInterrupted.exchange(true)) {
-        std::signal(SIGINT, SIG_DFL); // a second Ctrl-C: stop now
-        std::raise(SIGINT);
+        std::signal(signal, SIG_DFL); // a second signal: stop now
+        std::raise(signal);
     }
 }
 } // namespace
@@ -26,7 +30,15 @@ extern "C" void onInterrupt(int)
 void installInterruptHandler()
 {
     std::signal(SIGINT, onInterrupt);
+    std::signal(SIGTERM, onInterrupt);
 }
+
+int interruptExitCode()
+{
+    const int signal = gSignal.load();
+    return 128 + (signal ? signal : SIGINT);
+}
+
 bool interrupted()
 {
     return gInterrupted.load();
@@ -38,14 +50,34 @@ void stopIfInterrupted(const Context& ctx)
     ctx.throwIfCancelled();
 }
 
+namespace {
+/// CLI11's PositiveNumber lets "nan" and "inf" through.
+const CLI::Validator kPositiveFinite(
+    [](std::string& text) {
+        double v = 0;
+        try {
+            size_t used = 0;
+            v = std::stod(text, &used);
+            if (used != text.size()) return std::string("'" + text + "' is not a number");
+        } catch (const std::exception&) {
+            return std::string("'" + text + "' is not a number");
+        }
+        if (!std::isfinite(v) || !(v > 0))
+            return std::string("must be a positive finite number (got " + text + ")");
+        return std::string();
+    },
+    "POSITIVE");
+} // namespace
+
 void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
 {
     Params& f = o.params.field;
     cmd->add_option("-r,--radius", o.params.radius,
                     "particle radius r = half the rest spacing, world units "
-                    "(default: the radius attribute, else an estimate)");
+                    "(default: the radius attribute, else an estimate)")
+        ->check(kPositiveFinite);
     auto rel = [&](const char* name, double& v, const char* text) {
-        cmd->add_option(name, v, text)->capture_default_str()->check(CLI::PositiveNumber);
+        cmd->add_option(name, v, text)->capture_default_str()->check(kPositiveFinite);
     };
     rel("--voxel", f.voxelSize, "voxel (Marching Cubes cell) size, in r");
     rel("--influence", f.influenceRadius, "influence radius R of the field kernel, in r");
@@ -131,6 +163,36 @@ double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first)
         std::printf("radius r ~ %g (ESTIMATE: %s; pass -r with the simulator's radius)\n", c.radius,
                     c.detail.c_str());
     return c.radius;
+}
+
+void warnIfEmpty(const std::string& input, const ParticleSet& ps, const RasterizeStats& s,
+                 double radius, bool noTriangles)
+{
+    if (ps.empty() || (s.activeVoxels > 0 && !noTriangles)) return;
+    std::string why;
+    if (s.isolated == s.particles) {
+        why = "every particle is isolated (no neighbour within h); --keep-isolated makes them "
+              "spheres";
+    } else {
+        const SpacingEstimate est = estimateSpacing(ps);
+        char text[200];
+        if (est.radius > 0 && radius / est.radius > 0.5 && radius / est.radius < 2)
+            std::snprintf(text, sizeof(text),
+                          "r = %g matches the spacing; check the lengths relative to it (--voxel, "
+                          "--influence, --band, --smoothing-length)",
+                          radius);
+        else if (est.radius > 0)
+            std::snprintf(text, sizeof(text),
+                          "r = %g is %.3g times the radius the spacing suggests (%g); check -r and "
+                          "the lengths relative to it",
+                          radius, radius / est.radius, est.radius);
+        else
+            std::snprintf(text, sizeof(text), "check -r (%g) and the lengths relative to it",
+                          radius);
+        why = text;
+    }
+    std::fprintf(stderr, "fluidsurf: warning: %s: no surface from %zu particles: %s\n",
+                 input.c_str(), ps.size(), why.c_str());
 }
 
 std::vector<std::pair<std::string, double>> fieldCounts(const RasterizeStats& s)

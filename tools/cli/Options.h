@@ -42,6 +42,11 @@ void addRunOptions(CLI::App* cmd, PipelineOptions& o, bool meshing);
 /// r for a sequence from its first frame, printed with its source (an estimate as "ESTIMATE").
 double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first);
 
+/// On stderr: a non-empty frame gave no surface (no active voxel or no triangle); names the
+/// likely cause (r against the spacing estimate, or every particle isolated).
+void warnIfEmpty(const std::string& input, const ParticleSet& ps, const RasterizeStats& s,
+                 double radius, bool noTriangles);
+
 /// The per-frame report: -v prints the timing tree (and, after a rasterization, where the field
 /// ran); --stats collects every frame and is written at the end.
 class Report
@@ -64,10 +69,12 @@ private:
 std::vector<std::pair<std::string, double>> fieldCounts(const RasterizeStats& s);
 std::vector<std::pair<std::string, double>> meshCounts(const MeshReport& r);
 
-/// Ctrl-C (SIGINT) asks every context set up by PipelineOptions to stop; a second Ctrl-C ends
-/// the process at once.
+/// Ctrl-C (SIGINT) or SIGTERM asks every context set up by PipelineOptions to stop; a second
+/// signal ends the process at once.
 void installInterruptHandler();
 bool interrupted();
+/// 130 after SIGINT, 143 after SIGTERM (the shell's 128 + signal).
+int interruptExitCode();
 /// Between stages and frames: Cancelled when ctx was stopped or Ctrl-C came.
 void stopIfInterrupted(const Context& ctx);
 

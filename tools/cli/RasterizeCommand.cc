@@ -49,6 +49,7 @@ Runner addRasterizeCommand(CLI::App& app)
     return [o]() {
         const PipelineOptions& po = o->pipeline;
         const auto jobs = planVdbFrames(o->input, o->output, o->frames, "output");
+        refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
         ReconstructParams params = po.resolved();
         Context ctx;
         const auto threadLimit = po.setUp(ctx);
@@ -87,6 +88,7 @@ Runner addRasterizeCommand(CLI::App& app)
                 if (ri.droppedNonFinite)
                     std::printf("  %zu non-finite particles dropped\n", ri.droppedNonFinite);
             }
+            warnIfEmpty(jobs[i].input, ps, s, params.radius, false);
             report.frame(jobs[i].input, ctx, fieldCounts(s), &s);
             stopIfInterrupted(ctx); // Ctrl-C during the write: that frame is complete
         }

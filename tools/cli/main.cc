@@ -56,7 +56,7 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
     } catch (const fluidsurf::Cancelled&) {
         // Ctrl-C: outputs are written through temporary files, so nothing partial is left.
         std::cerr << "fluidsurf: interrupted; no partial output was written\n";
-        return 130;
+        return cli::interruptExitCode();
     } catch (const fluidsurf::Error& e) {
         std::cerr << "fluidsurf: error: " << e.what() << "\n";
         return 1;

@@ -20,6 +20,11 @@ std::vector<uint8_t> readFile(const std::string& path)
     if (::stat(path.c_str(), &st) != 0)
         throw InputError(path + ": cannot open: " + std::strerror(errno));
     if (S_ISDIR(st.st_mode)) throw InputError(path + ": is a directory, not a file");
+    // A FIFO would block forever and a device (/dev/zero, /dev/urandom) never ends: only
+    // regular files are read, and their size is known before the first byte.
+    if (!S_ISREG(st.st_mode))
+        throw InputError(path + ": not a regular file (a FIFO, device or socket); fluidsurf reads "
+                                "regular files only");
     std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
     if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
     std::vector<uint8_t> data;

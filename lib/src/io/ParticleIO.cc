@@ -87,10 +87,9 @@ ParticleSet readParticlesFromMemory(const uint8_t* data, size_t size, ParticleFo
                                     const std::string& source, const ReadOptions& options,
                                     ReadInfo* info)
 {
-    // A headerless .xyz holding no particles is an empty file; other formats need a header.
-    if (size == 0 && !(format == ParticleFormat::Xyz && options.allowEmpty))
-        throw InputError(source + ": file is empty" +
-                         (format == ParticleFormat::Xyz ? " (no particles)" : ""));
+    // An empty file is an error in every format (a headerless .xyz too: nothing says it is
+    // particles at all); a file whose header says 0 particles is an empty frame.
+    if (size == 0) throw InputError(source + ": file is empty");
     const ParticleFormat content = formatFromContent(data, size);
     if (content != ParticleFormat::Unknown && content != format &&
         !(format == ParticleFormat::VtkXml && content == ParticleFormat::VtkXml))

@@ -147,10 +147,17 @@ TEST_P(BadInput, ZeroParticles)
 {
     const FormatCase c = GetParam();
     const std::string file = validFile(c.format, ParticleSet());
-    EXPECT_NE(readError(file, c.format).find("no particles"), std::string::npos)
-        << readError(file, c.format);
     io::ReadOptions allow;
     allow.allowEmpty = true;
+    if (c.format == ParticleFormat::Xyz) {
+        // Headerless: no particles is a 0-byte file, which cannot be told from a lost one, so it
+        // is an error like every empty file, even where empty frames are allowed.
+        EXPECT_NE(readError(file, c.format).find("file is empty"), std::string::npos);
+        EXPECT_THROW(readBytes(file, c.format, allow), InputError);
+        return;
+    }
+    EXPECT_NE(readError(file, c.format).find("no particles"), std::string::npos)
+        << readError(file, c.format);
     EXPECT_EQ(readBytes(file, c.format, allow).size(), 0u);
 }
 

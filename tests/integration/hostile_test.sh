@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# hostile_test.sh FLUIDSURF_BINARY - input a careless or hostile user would give (issue 12):
+# outputs that would overwrite an input, non-regular files behind particle names, empty files,
+# radii and lengths that cannot work, SIGTERM. Every refusal is one 'fluidsurf: error:' line with
+# a non-zero exit and the inputs unchanged.
+set -u
+BIN=$1
+T=$(mktemp -d /tmp/fluidsurf_hostile_XXXXXX)
+trap 'rm -rf "$T"' EXIT
+source "$(dirname "$0")/checks.sh"
+
+"$BIN" generate ball --count 2000 -r 0.025 -o "$T/x.ply" >/dev/null
+cp "$T/x.ply" "$T/x.orig"
+"$BIN" convert "$T/x.ply" "$T/p.vdb" >/dev/null
+cp "$T/p.vdb" "$T/p.orig"
+
+# --- an output that is an input of the same run --------------------------------------------
+expect_error "reconstruct x.ply -o x.ply" "refusing to overwrite an input" "$BIN" reconstruct "$T/x.ply" -r 0.025 -o "$T/x.ply"
+check "reconstruct x.ply -o x.ply: input unchanged" cmp -s "$T/x.ply" "$T/x.orig"
+expect_error "rasterize p.vdb -o p.vdb" "refusing to overwrite an input" "$BIN" rasterize "$T/p.vdb" -r 0.025 -o "$T/p.vdb"
+check "rasterize p.vdb -o p.vdb: input unchanged" cmp -s "$T/p.vdb" "$T/p.orig"
+expect_error "convert x.ply x.ply" "refusing to overwrite an input" "$BIN" convert "$T/x.ply" "$T/x.ply"
+expect_error "the same file by another path" "is the input" "$BIN" reconstruct "$T/x.ply" -r 0.025 -o "$T/./x.ply"
+ln -s "$T/x.ply" "$T/link.ply"
+expect_error "the same file through a link" "is the input" "$BIN" reconstruct "$T/x.ply" -r 0.025 -o "$T/link.ply"
+check "through a link: input unchanged" cmp -s "$T/x.ply" "$T/x.orig"
+cp "$T/x.ply" "$T/s_0001.ply" && cp "$T/x.ply" "$T/s_0002.ply"
+expect_error "a pattern onto its own frames" "is the input" "$BIN" convert "$T/s_{:04}.ply" "$T/s_####.ply"
+"$BIN" rasterize "$T/x.ply" -r 0.025 -o "$T/ls.vdb" -q
+cp "$T/ls.vdb" "$T/ls.orig"
+expect_error "mesh ls.vdb -o ls.vdb" "must end in .obj" "$BIN" mesh "$T/ls.vdb" -o "$T/ls.vdb"
+check "mesh: level set unchanged" cmp -s "$T/ls.vdb" "$T/ls.orig"
+
+# --- files that are not regular files, empty files ------------------------------------------
+mkfifo "$T/fifo.bgeo"
+start=$(date +%s)
+expect_error "a FIFO named .bgeo is refused at once" "not a regular file" timeout 10 "$BIN" info "$T/fifo.bgeo"
+check "the FIFO did not block" test $(($(date +%s) - start)) -lt 5
+ln -s /dev/zero "$T/zero.bgeo"
+expect_error "/dev/zero behind a particle name" "not a regular file" timeout 10 "$BIN" rasterize "$T/zero.bgeo" -r 0.025 -o "$T/z.vdb"
+: >"$T/empty.xyz"
+expect_error "an empty .xyz in info" "file is empty" "$BIN" info "$T/empty.xyz"
+: >"$T/empty.bgeo"
+expect_error "an empty .bgeo in info" "file is empty" "$BIN" info "$T/empty.bgeo"
+
+# --- radii and lengths that cannot work ------------------------------------------------------
+for r in 0 -1 nan inf 1x; do
+    expect_error "-r $r" "radius" "$BIN" rasterize "$T/x.ply" -r "$r" -o "$T/r.vdb"
+done
+expect_error "--voxel nan" "voxel" "$BIN" rasterize "$T/x.ply" -r 0.025 --voxel nan -o "$T/r.vdb"
+"$BIN" generate ball --count 2000 -r 1e-6 -o "$T/tiny.bgeo" >/dev/null
+expect_error "a voxel too small for OpenVDB" "voxel size 1e-06 is too small" "$BIN" rasterize "$T/tiny.bgeo" -r 1e-6 -o "$T/r.vdb"
+check "no output after the refusals" bash -c "! ls '$T' | grep -Eq '^(r|z)\.vdb|tmp'"
+err=$("$BIN" reconstruct "$T/x.ply" -r 1e6 -o "$T/huge.obj" -q 2>&1 >/dev/null)
+check "-r 1e6: a warning names the likely cause" grep -q "warning: .*no surface from 2007 particles: r = 1e+06 is" <<<"$err"
+err=$("$BIN" reconstruct "$T/x.ply" -r 0.025 --influence 1000 -o "$T/huge.obj" -q 2>&1 >/dev/null)
+check "--influence 1000: a warning names the lengths" grep -q "warning: .*check the lengths relative to it" <<<"$err"
+
+# --- SIGTERM: exit 143, nothing written ------------------------------------------------------
+"$BIN" generate drop --count 1000000 -r 0.01 -o "$T/big.bgeo" >/dev/null
+"$BIN" reconstruct "$T/big.bgeo" -r 0.01 --voxel 0.25 -o "$T/term.obj" --vdb "$T/term.vdb" -q 2>"$T/term.err" &
+pid=$!
+sleep 0.6
+kill -TERM $pid
+wait $pid
+rc=$?
+check "SIGTERM exits with 143 (got $rc)" test $rc -eq 143
+check "SIGTERM leaves no output and no temporary file" bash -c "! ls '$T' | grep -Eq 'term\.(obj|vdb)|tmp'"
+
+echo "hostile: $pass passed, $fail failed"
+[ $fail -eq 0 ]
