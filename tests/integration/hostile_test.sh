@@ -58,6 +58,19 @@ check "--influence 1000: a warning names the lengths" grep -q "warning: .*check 
 
 # --- SIGTERM: exit 143, nothing written ------------------------------------------------------
 "$BIN" generate drop --count 1000000 -r 0.01 -o "$T/big.bgeo" >/dev/null
+echo old >"$T/term_old.obj" && echo old >"$T/term_old.vdb"
+"$BIN" reconstruct "$T/big.bgeo" -r 0.01 --voxel 0.25 -o "$T/term_old.obj" --vdb "$T/term_old.vdb" -q 2>/dev/null &
+pid=$!
+sleep 0.6
+kill -TERM $pid
+wait $pid
+check "SIGTERM keeps both existing outputs of the frame" bash -c "[ \"\$(cat '$T/term_old.obj')\" = old ] && [ \"\$(cat '$T/term_old.vdb')\" = old ]"
+# A temporary left by a killed run (its PID runs no more) is removed by the next run there.
+dead=4000000
+while kill -0 $dead 2>/dev/null || [ -d /proc/$dead ]; do dead=$((dead - 1)); done
+echo stale >"$T/.fluidsurf-tmp-$dead-0.x.obj"
+"$BIN" reconstruct "$T/x.ply" -r 0.025 -o "$T/fresh.obj" -q
+check "a killed run's temporary is removed by the next run" test ! -e "$T/.fluidsurf-tmp-$dead-0.x.obj"
 "$BIN" reconstruct "$T/big.bgeo" -r 0.01 --voxel 0.25 -o "$T/term.obj" --vdb "$T/term.vdb" -q 2>"$T/term.err" &
 pid=$!
 sleep 0.6

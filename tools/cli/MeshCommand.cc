@@ -9,6 +9,7 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/Reconstruct.h>
+#include <fluidsurf/io/AtomicFile.h>
 #include <fluidsurf/io/LevelSetIO.h>
 #include <fluidsurf/io/MeshIO.h>
 #include <fluidsurf/io/ParticleIO.h>
@@ -45,16 +46,19 @@ std::vector<FrameJob> planMeshJobs(const MeshOptions& o)
     return jobs;
 }
 
-/// Write the mesh, check it with --check, and print the frame's lines.
+/// Write the mesh beside what the group holds already, move them all into place, check the
+/// mesh with --check, and print the frame's lines.
 void writeAndReport(const MeshOptions& o, Context& ctx, const TriangleMesh& mesh,
-                    const FrameJob& job, bool bar, Report& report,
+                    const FrameJob& job, bool bar, Report& report, io::OutputGroup& outputs,
                     std::vector<std::pair<std::string, double>> counts,
                     const RasterizeStats* field = nullptr)
 {
     const PipelineOptions& po = o.pipeline;
     {
         const auto t = ctx.scope("write mesh");
-        io::writeMesh(mesh, job.output);
+        io::writeMesh(mesh, outputs.add(job.output));
+        stopIfInterrupted(ctx); // a stop here keeps the frame's old files, all of them
+        outputs.commit();
     }
     MeshReport check;
     if (po.check) {
@@ -114,7 +118,8 @@ Runner addMeshCommand(CLI::App& app)
             stopIfInterrupted(ctx);
             MeshStats ms;
             const TriangleMesh mesh = meshLevelSet(*grid, mesher, ctx, &ms);
-            writeAndReport(*o, ctx, mesh, jobs[i], bar.enabled(), report,
+            io::OutputGroup outputs;
+            writeAndReport(*o, ctx, mesh, jobs[i], bar.enabled(), report, outputs,
                            {{"surface_cells", double(ms.surfaceCells)}});
             stopIfInterrupted(ctx);
         }
@@ -172,9 +177,11 @@ Runner addReconstructCommand(CLI::App& app)
             // One radius for the whole sequence: surfaces of neighbouring frames must match.
             if (i == 0) params.radius = chooseSequenceRadius(po, ps);
             const ReconstructResult res = reconstruct(ps, params, ctx, jobs[i].input);
+            // The frame's .vdb and mesh appear together, after both were written.
+            io::OutputGroup outputs;
             if (!vdbJobs.empty()) {
                 const auto t = ctx.scope("write vdb");
-                io::writeLevelSet({res.levelSet}, vdbJobs[i].output);
+                io::writeLevelSet({res.levelSet}, outputs.add(vdbJobs[i].output));
             }
             if (!po.quiet && !bar.enabled() && (res.field.isolated || ri.droppedNonFinite))
                 std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",
@@ -184,7 +191,8 @@ Runner addReconstructCommand(CLI::App& app)
             warnIfEmpty(jobs[i].input, ps, res.field, params.radius, res.mesh.empty());
             std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
             counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
-            writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, counts, &res.field);
+            writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
+                           &res.field);
             stopIfInterrupted(ctx);
         }
         bar.finish();

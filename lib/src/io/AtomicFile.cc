@@ -6,17 +6,52 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <dirent.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
+
+#include <cstdlib>
+#include <mutex>
+#include <set>
 
 namespace fluidsurf {
 namespace io {
 
 namespace {
+constexpr const char* kTempPrefix = ".fluidsurf-tmp-";
+
 std::string folderOf(const std::string& path)
 {
     const size_t slash = path.find_last_of('/');
     return slash == std::string::npos ? std::string(".") : path.substr(0, slash + 1);
+}
+
+/// Temporaries of runs that were killed (SIGKILL, power loss) before their destructors ran:
+/// ".fluidsurf-tmp-PID-..." whose PID is no longer a running process. Once per folder and
+/// process.
+void removeStaleTemporaries(const std::string& folder)
+{
+    static std::mutex mutex;
+    static std::set<std::string> done;
+    {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!done.insert(folder).second) return;
+    }
+    DIR* dir = ::opendir(folder.c_str());
+    if (!dir) return;
+    const size_t prefix = std::strlen(kTempPrefix);
+    while (const dirent* entry = ::readdir(dir)) {
+        const std::string name = entry->d_name;
+        if (name.compare(0, prefix, kTempPrefix) != 0) continue;
+        char* end = nullptr;
+        const long pid = std::strtol(name.c_str() + prefix, &end, 10);
+        if (pid <= 0 || !end || *end != '-') continue;
+        if (::kill(pid_t(pid), 0) == 0 || errno != ESRCH) continue; // alive, or not ours to judge
+        const std::string path = folder + (folder.back() == '/' ? "" : "/") + name;
+        ::unlink(path.c_str());
+    }
+    ::closedir(dir);
 }
 } // namespace
 
@@ -33,8 +68,9 @@ AtomicFile::AtomicFile(const std::string& target) : mTarget(target)
     const std::string base = slash == std::string::npos ? target : target.substr(slash + 1);
     const std::string dir =
         slash == std::string::npos ? std::string() : target.substr(0, slash + 1);
-    mTemp =
-        dir + "." + base + ".tmp" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
+    removeStaleTemporaries(folderOf(target));
+    mTemp = dir + kTempPrefix + std::to_string(::getpid()) + "-" + std::to_string(counter++) + "." +
+            base;
 }
 
 AtomicFile::~AtomicFile()
@@ -66,6 +102,18 @@ void writeFileAtomic(const std::string& path, const void* data, size_t size)
     if (std::fclose(f) != 0 || !ok)
         throw OutputError(path + ": write failed: " + std::strerror(ok ? errno : err));
     file.commit();
+}
+
+std::string OutputGroup::add(const std::string& target)
+{
+    mFiles.push_back(std::make_unique<AtomicFile>(target));
+    return mFiles.back()->tempPath();
+}
+
+void OutputGroup::commit()
+{
+    for (const std::unique_ptr<AtomicFile>& f : mFiles)
+        f->commit();
 }
 
 } // namespace io
