@@ -56,6 +56,18 @@ check "-r 1e6: a warning names the likely cause" grep -q "warning: .*no surface 
 err=$("$BIN" reconstruct "$T/x.ply" -r 0.025 --influence 1000 -o "$T/huge.obj" -q 2>&1 >/dev/null)
 check "--influence 1000: a warning names the lengths" grep -q "warning: .*check the lengths relative to it" <<<"$err"
 
+# --- particles far away ----------------------------------------------------------------------
+"$BIN" generate drop --count 20000 -r 0.025 -o "$T/near.xyz" >/dev/null
+/usr/bin/python3 -c "
+import struct, sys
+d = open('$T/near.xyz', 'rb').read()
+open('$T/far.xyz', 'wb').write(d + struct.pack('<3f', 0.025 * 1e7, 0, 0))
+open('$T/farpair.xyz', 'wb').write(d + struct.pack('<6f', 0.025 * 1e7, 0, 0, 0.025 * 1e7 + 0.05, 0, 0))"
+"$BIN" reconstruct "$T/near.xyz" -r 0.025 -o "$T/near.obj" -q
+check "one particle 1e7 r away: the frame still reconstructs" "$BIN" reconstruct "$T/far.xyz" -r 0.025 -o "$T/far.obj" -q
+check "one particle 1e7 r away: the same mesh as without it" cmp -s "$T/near.obj" "$T/far.obj"
+expect_error "a far cluster the grid cannot hold: the error names the file" "farpair.xyz: the particles span" "$BIN" reconstruct "$T/farpair.xyz" -r 0.025 -o "$T/fp.obj"
+
 # --- SIGTERM: exit 143, nothing written ------------------------------------------------------
 "$BIN" generate drop --count 1000000 -r 0.01 -o "$T/big.bgeo" >/dev/null
 echo old >"$T/term_old.obj" && echo old >"$T/term_old.vdb"

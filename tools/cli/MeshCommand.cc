@@ -107,22 +107,23 @@ Runner addMeshCommand(CLI::App& app)
         const auto threadLimit = po.setUp(ctx);
         Progress bar(jobs.size(), "mesh", po.quiet);
         Report report(po);
-        for (size_t i = 0; i < jobs.size(); ++i) {
-            bar.update(i, jobs[i].input);
-            ctx.timing().clear();
-            openvdb::FloatGrid::Ptr grid;
-            {
-                const auto t = ctx.scope("read");
-                grid = io::readLevelSet(jobs[i].input, o->grid);
-            }
-            stopIfInterrupted(ctx);
-            MeshStats ms;
-            const TriangleMesh mesh = meshLevelSet(*grid, mesher, ctx, &ms);
-            io::OutputGroup outputs;
-            writeAndReport(*o, ctx, mesh, jobs[i], bar.enabled(), report, outputs,
-                           {{"surface_cells", double(ms.surfaceCells)}});
-            stopIfInterrupted(ctx);
-        }
+        for (size_t i = 0; i < jobs.size(); ++i)
+            forFile(jobs[i].input, [&] {
+                bar.update(i, jobs[i].input);
+                ctx.timing().clear();
+                openvdb::FloatGrid::Ptr grid;
+                {
+                    const auto t = ctx.scope("read");
+                    grid = io::readLevelSet(jobs[i].input, o->grid);
+                }
+                stopIfInterrupted(ctx);
+                MeshStats ms;
+                const TriangleMesh mesh = meshLevelSet(*grid, mesher, ctx, &ms);
+                io::OutputGroup outputs;
+                writeAndReport(*o, ctx, mesh, jobs[i], bar.enabled(), report, outputs,
+                               {{"surface_cells", double(ms.surfaceCells)}});
+                stopIfInterrupted(ctx);
+            });
         bar.finish();
         report.finish();
         return 0;
@@ -164,37 +165,38 @@ Runner addReconstructCommand(CLI::App& app)
         prepareDevice(ctx.device());
         Progress bar(jobs.size(), "reconstruct", po.quiet);
         Report report(po);
-        for (size_t i = 0; i < jobs.size(); ++i) {
-            bar.update(i, jobs[i].input);
-            ctx.timing().clear();
-            io::ReadInfo ri;
-            ParticleSet ps;
-            {
-                const auto t = ctx.scope("read");
-                ps = io::readParticles(jobs[i].input, ro, &ri);
-            }
-            stopIfInterrupted(ctx);
-            // One radius for the whole sequence: surfaces of neighbouring frames must match.
-            if (i == 0) params.radius = chooseSequenceRadius(po, ps);
-            const ReconstructResult res = reconstruct(ps, params, ctx, jobs[i].input);
-            // The frame's .vdb and mesh appear together, after both were written.
-            io::OutputGroup outputs;
-            if (!vdbJobs.empty()) {
-                const auto t = ctx.scope("write vdb");
-                io::writeLevelSet({res.levelSet}, outputs.add(vdbJobs[i].output));
-            }
-            if (!po.quiet && !bar.enabled() && (res.field.isolated || ri.droppedNonFinite))
-                std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",
-                            jobs[i].input.c_str(), res.field.isolated,
-                            params.field.keepIsolated ? "kept as spheres" : "left out",
-                            ri.droppedNonFinite);
-            warnIfEmpty(jobs[i].input, ps, res.field, params.radius, res.mesh.empty());
-            std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
-            counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
-            writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
-                           &res.field);
-            stopIfInterrupted(ctx);
-        }
+        for (size_t i = 0; i < jobs.size(); ++i)
+            forFile(jobs[i].input, [&] {
+                bar.update(i, jobs[i].input);
+                ctx.timing().clear();
+                io::ReadInfo ri;
+                ParticleSet ps;
+                {
+                    const auto t = ctx.scope("read");
+                    ps = io::readParticles(jobs[i].input, ro, &ri);
+                }
+                stopIfInterrupted(ctx);
+                // One radius for the whole sequence: surfaces of neighbouring frames must match.
+                if (i == 0) params.radius = chooseSequenceRadius(po, ps);
+                const ReconstructResult res = reconstruct(ps, params, ctx, jobs[i].input);
+                // The frame's .vdb and mesh appear together, after both were written.
+                io::OutputGroup outputs;
+                if (!vdbJobs.empty()) {
+                    const auto t = ctx.scope("write vdb");
+                    io::writeLevelSet({res.levelSet}, outputs.add(vdbJobs[i].output));
+                }
+                if (!po.quiet && !bar.enabled() && (res.field.isolated || ri.droppedNonFinite))
+                    std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",
+                                jobs[i].input.c_str(), res.field.isolated,
+                                params.field.keepIsolated ? "kept as spheres" : "left out",
+                                ri.droppedNonFinite);
+                warnIfEmpty(jobs[i].input, ps, res.field, params.radius, res.mesh.empty());
+                std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
+                counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
+                writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
+                               &res.field);
+                stopIfInterrupted(ctx);
+            });
         bar.finish();
         report.finish();
         return 0;

@@ -69,6 +69,25 @@ private:
 std::vector<std::pair<std::string, double>> fieldCounts(const RasterizeStats& s);
 std::vector<std::pair<std::string, double>> meshCounts(const MeshReport& r);
 
+/// Runs one frame's work so that every error names the frame's file, whatever layer raised it
+/// (the pipeline's limits, OpenVDB's exceptions, std::bad_alloc); messages that name it already
+/// pass unchanged. A stop (Cancelled) passes through.
+template <typename F> auto forFile(const std::string& file, F&& work) -> decltype(work())
+{
+    try {
+        return work();
+    } catch (const Cancelled&) {
+        throw;
+    } catch (const Error& e) {
+        if (std::string(e.what()).find(file) != std::string::npos) throw;
+        throw Error(file + ": " + e.what());
+    } catch (const openvdb::Exception& e) {
+        throw Error(file + ": " + e.what());
+    } catch (const std::bad_alloc&) {
+        throw Error(file + ": out of memory");
+    }
+}
+
 /// Ctrl-C (SIGINT) or SIGTERM asks every context set up by PipelineOptions to stop; a second
 /// signal ends the process at once.
 void installInterruptHandler();

@@ -59,39 +59,41 @@ Runner addRasterizeCommand(CLI::App& app)
         Progress bar(jobs.size(), "rasterize", po.quiet);
         Report report(po);
         const auto start = std::chrono::steady_clock::now();
-        for (size_t i = 0; i < jobs.size(); ++i) {
-            bar.update(i, jobs[i].input);
-            ctx.timing().clear();
-            io::ReadInfo ri;
-            ParticleSet ps;
-            {
-                const auto t = ctx.scope("read");
-                ps = io::readParticles(jobs[i].input, ro, &ri);
-            }
-            stopIfInterrupted(ctx);
-            // One radius for the whole sequence: surfaces of neighbouring frames must match.
-            if (i == 0) params.radius = chooseSequenceRadius(po, ps);
-            const RasterizeResult res =
-                rasterizeParticles(ps, params.fieldParams(params.radius), ctx, jobs[i].input);
-            {
-                const auto t = ctx.scope("write");
-                io::writeLevelSet({res.grid}, jobs[i].output);
-            }
-            ctx.timing().finish();
-            const RasterizeStats& s = res.stats;
-            if (!po.quiet && !bar.enabled()) {
-                std::printf("%s -> %s: %zu particles (%zu surface, %zu splash, %zu isolated%s), "
-                            "%zu active voxels, %.3f s\n",
-                            jobs[i].input.c_str(), jobs[i].output.c_str(), s.particles, s.surface,
-                            s.splash, s.isolated, params.field.keepIsolated ? " kept" : " left out",
-                            s.activeVoxels, ctx.timing().root().seconds);
-                if (ri.droppedNonFinite)
-                    std::printf("  %zu non-finite particles dropped\n", ri.droppedNonFinite);
-            }
-            warnIfEmpty(jobs[i].input, ps, s, params.radius, false);
-            report.frame(jobs[i].input, ctx, fieldCounts(s), &s);
-            stopIfInterrupted(ctx); // Ctrl-C during the write: that frame is complete
-        }
+        for (size_t i = 0; i < jobs.size(); ++i)
+            forFile(jobs[i].input, [&] {
+                bar.update(i, jobs[i].input);
+                ctx.timing().clear();
+                io::ReadInfo ri;
+                ParticleSet ps;
+                {
+                    const auto t = ctx.scope("read");
+                    ps = io::readParticles(jobs[i].input, ro, &ri);
+                }
+                stopIfInterrupted(ctx);
+                // One radius for the whole sequence: surfaces of neighbouring frames must match.
+                if (i == 0) params.radius = chooseSequenceRadius(po, ps);
+                const RasterizeResult res =
+                    rasterizeParticles(ps, params.fieldParams(params.radius), ctx, jobs[i].input);
+                {
+                    const auto t = ctx.scope("write");
+                    io::writeLevelSet({res.grid}, jobs[i].output);
+                }
+                ctx.timing().finish();
+                const RasterizeStats& s = res.stats;
+                if (!po.quiet && !bar.enabled()) {
+                    std::printf(
+                        "%s -> %s: %zu particles (%zu surface, %zu splash, %zu isolated%s), "
+                        "%zu active voxels, %.3f s\n",
+                        jobs[i].input.c_str(), jobs[i].output.c_str(), s.particles, s.surface,
+                        s.splash, s.isolated, params.field.keepIsolated ? " kept" : " left out",
+                        s.activeVoxels, ctx.timing().root().seconds);
+                    if (ri.droppedNonFinite)
+                        std::printf("  %zu non-finite particles dropped\n", ri.droppedNonFinite);
+                }
+                warnIfEmpty(jobs[i].input, ps, s, params.radius, false);
+                report.frame(jobs[i].input, ctx, fieldCounts(s), &s);
+                stopIfInterrupted(ctx); // Ctrl-C during the write: that frame is complete
+            });
         bar.finish();
         report.finish();
         const double secs =

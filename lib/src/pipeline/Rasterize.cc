@@ -9,6 +9,7 @@
 #include "field/ScatterField.h"
 #include "levelset/LevelSet.h"
 #include "narrowband/NarrowBand.h"
+#include "neighbors/FarParticles.h"
 #include "util/Threads.h"
 
 #include <algorithm>
@@ -134,12 +135,39 @@ RasterizeResult rasterize(const ParticleSet& ps, const Params& params, Context& 
         gpu = gpuCheck.get();
     }
 
-    const backend::Particles particles{ps.positions, radii};
+    // A stray particle beyond the cell grid's reach is isolated by definition: it is taken out
+    // before the stages and reported with the others. Frames within reach are not touched.
+    std::vector<uint32_t> far, kept;
+    std::vector<Vec3f> keptPositions;
+    std::vector<float> keptRadii;
+    const double cellSize = std::min(params.influenceRadius, params.smoothingLength);
+    if (!params.keepIsolated && neighbors::exceedsCellRange(ps.positions, cellSize)) {
+        far = neighbors::axisSingletons(ps.positions,
+                                        std::max(params.influenceRadius, params.smoothingLength));
+        std::vector<uint8_t> isFar(ps.size(), 0);
+        for (uint32_t i : far)
+            isFar[i] = 1;
+        for (uint32_t i = 0; i < ps.size(); ++i)
+            if (!isFar[i]) {
+                kept.push_back(i), keptPositions.push_back(ps.positions[i]);
+                if (!radii.empty()) keptRadii.push_back(radii[i]);
+            }
+    }
+    const bool reduced = !far.empty();
+    const backend::Particles particles{reduced ? keptPositions : ps.positions,
+                                       reduced ? keptRadii : radii};
     openvdb::FloatTree::Ptr tree;
     backend::runOn(device, gpu.usable, gpu.reason, stats, [&](backend::Backend& b) {
         Run run{particles, params, level, ctx, result};
         tree = params.method == FieldMethod::NarrowBand ? run.narrowBand(b) : run.baseline(b);
     });
+    if (reduced) {
+        for (uint32_t& i : result.isolatedParticles)
+            i = kept[i];
+        result.isolatedParticles.insert(result.isolatedParticles.end(), far.begin(), far.end());
+        std::sort(result.isolatedParticles.begin(), result.isolatedParticles.end());
+        stats.isolated += far.size();
+    }
 
     const auto t = ctx.scope("level set");
     levelset::GridInfo info;

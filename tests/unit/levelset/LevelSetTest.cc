@@ -78,9 +78,14 @@ TEST(LevelSet, InvalidParametersAreRejected)
     p = Params::fromRadius(sp.radius);
     p.voxelSize = sp.radius / 32, p.influenceRadius = 1001 * p.voxelSize; // a huge kernel
     EXPECT_THROW(rasterizeParticles(ps, p), ValueError);
+    // One stray particle beyond the grid's reach is isolated (ReconstructTest); a far cluster,
+    // which is fluid, cannot be gridded with the rest and says so.
     ParticleSet far;
     far.positions = ps.positions;
     far.positions.push_back(Vec3f(1e12f, 0, 0)); // 2^21 cells cannot span it
+    EXPECT_EQ(rasterizeParticles(far, Params::fromRadius(sp.radius)).isolatedParticles.back(),
+              uint32_t(ps.size()));
+    far.positions.push_back(Vec3f(1e12f, 0, 0)); // a pair: not isolated
     try {
         rasterizeParticles(far, Params::fromRadius(sp.radius));
         ADD_FAILURE() << "no error";

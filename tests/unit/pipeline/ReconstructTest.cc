@@ -213,3 +213,31 @@ TEST(Reconstruct, CancelFromOutsideTheCallback)
 
 } // namespace
 } // namespace fluidsurf
+
+namespace fluidsurf {
+namespace {
+
+TEST(Reconstruct, AStrayParticleBeyondTheGridIsIsolated)
+{
+    SceneParams sp;
+    sp.count = 20000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    ParticleSet stray = ps;
+    stray.positions.push_back(Vec3f(float(1e7 * sp.radius), 0.f, 0.f)); // 1e7 r away
+    stray.attributes.clear();
+    ParticleSet plain = ps;
+    plain.attributes.clear();
+    Context a, b;
+    const ReconstructResult with = reconstruct(stray, ReconstructParams::fromRadius(sp.radius), a);
+    const ReconstructResult without =
+        reconstruct(plain, ReconstructParams::fromRadius(sp.radius), b);
+    EXPECT_TRUE(sameMesh(with.mesh, without.mesh));
+    EXPECT_TRUE(with.levelSet->tree().hasSameTopology(without.levelSet->tree()));
+    ASSERT_EQ(with.isolatedParticles.size(), without.isolatedParticles.size() + 1);
+    EXPECT_EQ(with.isolatedParticles.back(), uint32_t(ps.size())); // the stray one, by index
+    EXPECT_EQ(with.field.isolated, without.field.isolated + 1);
+    EXPECT_EQ(with.field.particles, stray.size());
+}
+
+} // namespace
+} // namespace fluidsurf
