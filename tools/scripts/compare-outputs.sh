@@ -13,7 +13,7 @@ T=$(mktemp -d /tmp/fluidsurf_compare_XXXXXX)
 trap 'rm -rf "$T"' EXIT
 pass=0 fail=0
 
-# name input radius [extra options...]
+# name input radius|estimate [extra options...]
 run_case() {
     local name=$1 input=$2 radius=$3
     shift 3
@@ -22,7 +22,9 @@ run_case() {
         local bin=$OLD
         [ "$side" = new ] && bin=$NEW
         mkdir -p "$T/$side"
-        if ! "$bin" reconstruct "$input" -r "$radius" -o "$T/$side/$name.obj" \
+        local r=(-r "$radius")
+        [ "$radius" = estimate ] && r=() # no -r: the radius is estimated
+        if ! "$bin" reconstruct "$input" "${r[@]}" -o "$T/$side/$name.obj" \
             --vdb "$T/$side/$name.vdb" --device "$DEVICE" -q "$@" >"$T/$side/$name.log" 2>&1; then
             echo "FAIL $name: $side binary failed: $(tail -1 "$T/$side/$name.log")"
             ok=0
@@ -68,6 +70,6 @@ for scene in single:1 block:20000 ball:20000 slab:20000 drop:40000 drop:1000000;
     "$OLD" generate "$s" --count "$n" -o "$T/$s-$n.bgeo" >/dev/null
     run_case "generated_${s}_$n" "$T/$s-$n.bgeo" 0.025
 done
-run_case generated_drop_40000_estimated_radius "$T/drop-40000.bgeo" 0
+run_case generated_drop_40000_estimated_radius "$T/drop-40000.bgeo" estimate
 echo "compare ($DEVICE): $pass passed, $fail failed"
 [ $fail = 0 ]
