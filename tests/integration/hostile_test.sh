@@ -43,6 +43,15 @@ expect_error "an empty .xyz in info" "file is empty" "$BIN" info "$T/empty.xyz"
 : >"$T/empty.bgeo"
 expect_error "an empty .bgeo in info" "file is empty" "$BIN" info "$T/empty.bgeo"
 
+truncate -s 400000001 "$T/big_odd.xyz" # sparse: 400 MB of zeros, one byte past a whole triple
+check "a 400 MB .xyz of the wrong size is refused from its first bytes (< 50 MB peak)" /usr/bin/python3 - "$BIN" "$T/big_odd.xyz" <<'PY'
+import resource, subprocess, sys
+r = subprocess.run([sys.argv[1], "info", sys.argv[2]], capture_output=True, text=True)
+peak_mib = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+assert r.returncode != 0 and "not a multiple of 12" in r.stderr, r.stderr
+assert peak_mib < 50, peak_mib
+PY
+
 # --- radii and lengths that cannot work ------------------------------------------------------
 for r in 0 -1 nan inf 1x; do
     expect_error "-r $r" "radius" "$BIN" rasterize "$T/x.ply" -r "$r" -o "$T/r.vdb"

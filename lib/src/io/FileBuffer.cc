@@ -5,6 +5,7 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -14,7 +15,7 @@
 namespace fluidsurf {
 namespace io_internal {
 
-std::vector<uint8_t> readFile(const std::string& path)
+std::vector<uint8_t> readFile(const std::string& path, const HeadCheck& check)
 {
     struct stat st;
     if (::stat(path.c_str(), &st) != 0)
@@ -31,8 +32,12 @@ std::vector<uint8_t> readFile(const std::string& path)
     if (S_ISREG(st.st_mode)) data.reserve(size_t(st.st_size));
     uint8_t chunk[1 << 16];
     if (S_ISREG(st.st_mode) && st.st_size > 0) {
-        data.resize(size_t(st.st_size));
-        size_t got = std::fread(data.data(), 1, data.size(), f.get());
+        const size_t size = size_t(st.st_size), head = std::min<size_t>(size, 4096);
+        data.resize(head);
+        size_t got = std::fread(data.data(), 1, head, f.get());
+        if (check && got == head) check(data.data(), head, uint64_t(size));
+        data.resize(size);
+        if (got == head) got += std::fread(data.data() + head, 1, size - head, f.get());
         data.resize(got);
     }
     // Anything beyond the stat size (pipes, growing files) is read in chunks.

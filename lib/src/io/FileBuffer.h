@@ -2,14 +2,20 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 namespace fluidsurf {
 namespace io_internal {
 
-/// Read a whole file; InputError with a clear reason (missing, directory, unreadable).
-std::vector<uint8_t> readFile(const std::string& path);
+/// Called with the file's first bytes (up to 4096) and its size before the rest is read, so a
+/// format can refuse a file it cannot hold without reading gigabytes first.
+using HeadCheck = std::function<void(const uint8_t* head, size_t headBytes, uint64_t fileBytes)>;
+
+/// Read a whole regular file; InputError with a clear reason (missing, directory, not a regular
+/// file, unreadable), or whatever check throws.
+std::vector<uint8_t> readFile(const std::string& path, const HeadCheck& check = {});
 
 bool isGzip(const uint8_t* data, size_t size);
 

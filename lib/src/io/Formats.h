@@ -19,6 +19,9 @@ ParticleSet readVtkXml(const uint8_t* data, size_t size, const std::string& src,
                        std::string* detail);
 ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+/// A raw .xyz whose size is not a multiple of 12 (and whose first bytes are not text): InputError.
+void checkXyzSize(const uint8_t* head, size_t headBytes, uint64_t fileBytes,
+                  const std::string& src);
 ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail);

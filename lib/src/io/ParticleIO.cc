@@ -158,7 +158,13 @@ ParticleSet readParticles(const std::string& path, const ReadOptions& options, R
     if (format == ParticleFormat::Unknown)
         throw InputError(path + ": unknown particle file type (extensions: .vtk .vtu .vtp .bgeo "
                                 ".bgeo.gz .ply .xyz .csv .txt .npy .vdb)");
-    const std::vector<uint8_t> data = readFile(path);
+    // A raw .xyz of the wrong size is refused from its first bytes, before the rest is read.
+    const std::vector<uint8_t> data =
+        readFile(path, format == ParticleFormat::Xyz
+                           ? HeadCheck([&](const uint8_t* head, size_t n, uint64_t bytes) {
+                                 checkXyzSize(head, n, bytes, path);
+                             })
+                           : HeadCheck());
     return readParticlesFromMemory(data.data(), data.size(), format, path, options, info);
 }
 

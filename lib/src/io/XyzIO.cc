@@ -25,6 +25,15 @@ bool looksLikeNumericText(const uint8_t* d, size_t size)
 }
 } // namespace
 
+void checkXyzSize(const uint8_t* head, size_t headBytes, uint64_t fileBytes, const std::string& src)
+{
+    if (looksLikeNumericText(head, headBytes) || fileBytes % 12 == 0) return;
+    throw InputError(src + ": raw .xyz size " + std::to_string(fileBytes) +
+                     " is not a multiple of 12 bytes (3 float32 per particle): truncated or not "
+                     "raw float32 xyz (at byte " +
+                     std::to_string(fileBytes - fileBytes % 12) + ")");
+}
+
 ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
 {
     if (looksLikeNumericText(data, size)) {
