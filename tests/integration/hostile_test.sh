@@ -77,6 +77,10 @@ check "one particle 1e7 r away: the frame still reconstructs" "$BIN" reconstruct
 check "one particle 1e7 r away: the same mesh as without it" cmp -s "$T/near.obj" "$T/far.obj"
 expect_error "a far cluster the grid cannot hold: the error names the file" "farpair.xyz: the particles span" "$BIN" reconstruct "$T/farpair.xyz" -r 0.025 -o "$T/fp.obj"
 
+/usr/bin/python3 -c "import struct; open('$T/coincident.xyz', 'wb').write(struct.pack('<3f', 1, 2, 3) * 120000)"
+err=$("$BIN" reconstruct "$T/coincident.xyz" -r 0.025 -o "$T/coincident.obj" -q 2>&1 >/dev/null)
+check "120,000 coincident particles: done, with a warning that says so" grep -q "warning: .*no surface from 120000 particles: most particles coincide" <<<"$err"
+
 # --- SIGTERM: exit 143, nothing written ------------------------------------------------------
 "$BIN" generate drop --count 1000000 -r 0.01 -o "$T/big.bgeo" >/dev/null
 echo old >"$T/term_old.obj" && echo old >"$T/term_old.vdb"

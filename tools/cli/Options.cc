@@ -176,7 +176,10 @@ void warnIfEmpty(const std::string& input, const ParticleSet& ps, const Rasteriz
     } else {
         const SpacingEstimate est = estimateSpacing(ps);
         char text[200];
-        if (est.radius > 0 && radius / est.radius > 0.5 && radius / est.radius < 2)
+        if (ps.size() > 1 && (est.sampled == 0 || est.medianNearest == 0))
+            std::snprintf(text, sizeof(text),
+                          "most particles coincide (the median distance to the nearest one is 0)");
+        else if (est.radius > 0 && radius / est.radius > 0.5 && radius / est.radius < 2)
             std::snprintf(text, sizeof(text),
                           "r = %g matches the spacing; check the lengths relative to it (--voxel, "
                           "--influence, --band, --smoothing-length)",

@@ -97,6 +97,16 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
                 const size_t m = nb.x.size();
                 for (uint32_t i = b; i < e; ++i) {
                     const Vec3f& p = index.positions[i];
+                    // A particle at exactly the previous one's position has exactly its sums:
+                    // coincident particles (a degenerate frame piles 1e5 on one point) cost one
+                    // neighbourhood pass per run instead of one each.
+                    if (i > b && p == index.positions[i - 1]) {
+                        out.neighbours[i] = out.neighbours[i - 1];
+                        out.colorField[i] = out.colorField[i - 1];
+                        out.colorGradient[i] = out.colorGradient[i - 1];
+                        out.classes[i] = out.classes[i - 1];
+                        continue;
+                    }
                     const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y),
                                 pz = float(double(p.z) - o.z);
                     Lanes count{}, cf{}, gx{}, gy{}, gz{};
