@@ -52,6 +52,22 @@ assert r.returncode != 0 and "not a multiple of 12" in r.stderr, r.stderr
 assert peak_mib < 50, peak_mib
 PY
 
+# A gzip bomb: a valid BGEO header with 3 points, then 1 GiB of zeros (1 MB compressed).
+/usr/bin/python3 - "$T/bomb.bgeo.gz" <<'PY'
+import struct, sys, zlib
+c = zlib.compressobj(9, zlib.DEFLATED, 31)
+out = [c.compress(b"BgeoV" + struct.pack(">i", 5) + struct.pack(">8i", 3, 0, 0, 0, 0, 0, 0, 0) +
+                  b"".join(struct.pack(">4f", i, 0, 0, 1) for i in range(3)))]
+out += [c.compress(bytes(1 << 24)) for _ in range(64)]
+open(sys.argv[1], "wb").write(b"".join(out) + c.flush())
+PY
+check "a BGEO gzip bomb inflates only what its header promises (3 particles, < 100 MB peak)" /usr/bin/python3 - "$BIN" "$T/bomb.bgeo.gz" <<'PY'
+import resource, subprocess, sys
+r = subprocess.run([sys.argv[1], "info", "--no-spacing", sys.argv[2]], capture_output=True, text=True)
+assert r.returncode == 0 and "particles   3\n" in r.stdout, (r.stdout, r.stderr)
+assert resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024 < 100
+PY
+
 # --- radii and lengths that cannot work ------------------------------------------------------
 for r in 0 -1 nan inf 1x; do
     expect_error "-r $r" "radius" "$BIN" rasterize "$T/x.ply" -r "$r" -o "$T/r.vdb"

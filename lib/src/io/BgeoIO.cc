@@ -29,16 +29,18 @@ struct AttrDef
 
 } // namespace
 
-ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+namespace {
+struct Header
 {
-    std::vector<uint8_t> inflated;
-    const bool zipped = isGzip(data, size);
-    if (zipped) {
-        inflated = gunzip(data, size, src);
-        data = inflated.data();
-        size = inflated.size();
-    }
-    ByteReader in(data, size, src + (zipped ? " (after gzip)" : ""));
+    int32_t points = 0;
+    std::vector<AttrDef> defs;
+    size_t valuesPerPoint = 4; ///< x y z w, then the attributes' components
+};
+
+/// Magic, version, counts and the point attribute definitions; in is left at the point data.
+Header readHeader(ByteReader& in, const uint8_t* data, size_t size)
+{
+    Header h;
     if (size < 5 || std::memcmp(data, "BgeoV", 5) != 0) {
         if (size >= 4 && std::memcmp(data, "Bgeo", 4) == 0)
             in.failAt(4, "unsupported BGEO flavour (only classic binary 'BgeoV' version 5)");
@@ -56,11 +58,12 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
         c = in.read<int32_t>(true, "header counts");
         if (c < 0) in.failAt(in.offset() - 4, "negative count " + std::to_string(c) + " in header");
     }
-    const int32_t nPoints = counts[0], nPointAttrib = counts[4];
+    const int32_t nPointAttrib = counts[4];
+    h.points = counts[0];
 
-    std::vector<AttrDef> defs(
-        size_t(in.checkedCount(uint64_t(nPointAttrib), 8, "attribute definitions")));
-    size_t valuesPerPoint = 4; // x y z w
+    std::vector<AttrDef>& defs = h.defs;
+    defs.resize(size_t(in.checkedCount(uint64_t(nPointAttrib), 8, "attribute definitions")));
+    size_t& valuesPerPoint = h.valuesPerPoint;
     for (AttrDef& d : defs) {
         const uint16_t len = in.read<uint16_t>(true, "attribute name length");
         const uint8_t* name = in.take(len, "attribute name");
@@ -87,6 +90,45 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
         valuesPerPoint += size_t(d.size);
     }
 
+    return h;
+}
+} // namespace
+
+ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+{
+    std::vector<uint8_t> inflated;
+    const bool zipped = isGzip(data, size);
+    if (zipped) {
+        // Inflate only what the header promises (header, definitions, points): a valid header
+        // followed by gigabytes of compressed zeros costs its points, not its tail. The header
+        // is read from a growing prefix first.
+        bool complete = false;
+        size_t want = size_t(1) << 16;
+        size_t needed = 0;
+        for (;;) {
+            inflated = gunzipPrefix(data, size, src, want, complete);
+            ByteReader probe(inflated.data(), inflated.size(), src + " (after gzip)");
+            try {
+                const Header h = readHeader(probe, inflated.data(), inflated.size());
+                const uint64_t bytes = uint64_t(h.points) * h.valuesPerPoint * 4;
+                needed = probe.offset() + size_t(std::min<uint64_t>(bytes, uint64_t(1) << 40));
+                break;
+            } catch (const InputError&) {
+                // The whole stream is here, or 64 MiB hold no header: the error is real.
+                if (complete || want >= (size_t(1) << 26)) throw;
+                want *= 16;
+            }
+        }
+        if (!complete && inflated.size() < needed)
+            inflated = gunzipPrefix(data, size, src, needed, complete);
+        data = inflated.data();
+        size = inflated.size();
+    }
+    ByteReader in(data, size, src + (zipped ? " (after gzip)" : ""));
+    const Header h = readHeader(in, data, size);
+    const std::vector<AttrDef>& defs = h.defs;
+    const size_t valuesPerPoint = h.valuesPerPoint;
+    const int32_t nPoints = h.points;
     const size_t n = in.checkedCount(uint64_t(nPoints), valuesPerPoint * 4, "points");
     const uint8_t* p = in.take(n * valuesPerPoint * 4, "point data");
     ParticleSet set;

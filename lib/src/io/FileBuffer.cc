@@ -52,13 +52,17 @@ bool isGzip(const uint8_t* data, size_t size)
     return size >= 2 && data[0] == 0x1f && data[1] == 0x8b;
 }
 
-std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string& source,
-                            size_t maxOutput)
+namespace {
+/// Inflate until the stream ends or `stop` bytes are out (complete: the stream ended); past
+/// maxOutput without ending is an error.
+std::vector<uint8_t> inflateGzip(const uint8_t* data, size_t size, const std::string& source,
+                                 size_t maxOutput, size_t stop, bool& complete)
 {
+    complete = false;
     z_stream zs{};
     if (inflateInit2(&zs, 15 + 16) != Z_OK) throw InputError(source + ": zlib init failed");
     std::vector<uint8_t> out;
-    out.resize(std::max<size_t>(size * 3, 1 << 16));
+    out.resize(std::min(std::max<size_t>(size * 3, 1 << 16), std::max<size_t>(stop, 1)));
     zs.next_in = const_cast<Bytef*>(data);
     size_t consumed = 0;
     int ret = Z_OK;
@@ -70,19 +74,23 @@ std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string&
             zs.avail_in = uInt(slice);
             consumed += slice;
         }
+        if (zs.total_out >= stop) break; // as much as the caller can use
         if (zs.total_out == out.size()) {
             if (out.size() >= maxOutput) {
                 inflateEnd(&zs);
                 throw InputError(source + ": gzip data expands beyond " +
                                  std::to_string(maxOutput) + " bytes");
             }
-            out.resize(std::min(out.size() * 2, maxOutput));
+            out.resize(std::min({out.size() * 2, maxOutput, stop}));
         }
         const size_t room = std::min<size_t>(out.size() - zs.total_out, 1u << 30);
         zs.next_out = out.data() + zs.total_out;
         zs.avail_out = uInt(room);
         ret = inflate(&zs, Z_NO_FLUSH);
-        if (ret == Z_STREAM_END) break;
+        if (ret == Z_STREAM_END) {
+            complete = true;
+            break;
+        }
         if (ret != Z_OK && ret != Z_BUF_ERROR) {
             const std::string msg = zs.msg ? zs.msg : "corrupt data";
             const size_t at = zs.total_in;
@@ -96,9 +104,23 @@ std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string&
                              std::to_string(size) + " compressed bytes)");
         }
     }
-    out.resize(zs.total_out);
+    out.resize(std::min<size_t>(zs.total_out, out.size()));
     inflateEnd(&zs);
     return out;
+}
+} // namespace
+
+std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string& source,
+                            size_t maxOutput)
+{
+    bool complete = false;
+    return inflateGzip(data, size, source, maxOutput, ~size_t(0), complete);
+}
+
+std::vector<uint8_t> gunzipPrefix(const uint8_t* data, size_t size, const std::string& source,
+                                  size_t want, bool& complete)
+{
+    return inflateGzip(data, size, source, size_t(1) << 36, want, complete);
 }
 
 void zlibInflate(const uint8_t* src, size_t srcSize, uint8_t* dst, size_t dstSize,

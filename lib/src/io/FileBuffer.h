@@ -24,6 +24,11 @@ bool isGzip(const uint8_t* data, size_t size);
 std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string& source,
                             size_t maxOutput = size_t(1) << 36);
 
+/// The first `want` bytes of a gzip stream (fewer when it ends sooner; complete says whether the
+/// whole stream fitted): a reader inflates only what its header promises, never a bomb's tail.
+std::vector<uint8_t> gunzipPrefix(const uint8_t* data, size_t size, const std::string& source,
+                                  size_t want, bool& complete);
+
 /// Inflate one zlib block whose decompressed size is known (VTK XML blocks).
 void zlibInflate(const uint8_t* src, size_t srcSize, uint8_t* dst, size_t dstSize,
                  const std::string& source);
