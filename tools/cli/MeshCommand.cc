@@ -168,16 +168,8 @@ Runner addReconstructCommand(CLI::App& app)
         for (size_t i = 0; i < jobs.size(); ++i)
             forFile(jobs[i].input, [&] {
                 bar.update(i, jobs[i].input);
-                ctx.timing().clear();
                 io::ReadInfo ri;
-                ParticleSet ps;
-                {
-                    const auto t = ctx.scope("read");
-                    ps = io::readParticles(jobs[i].input, ro, &ri);
-                }
-                stopIfInterrupted(ctx);
-                // One radius for the whole sequence: surfaces of neighbouring frames must match.
-                if (i == 0) params.radius = chooseSequenceRadius(po, ps);
+                const ParticleSet ps = readFrame(po, ctx, jobs[i].input, ro, ri, i == 0, params);
                 const ReconstructResult res = reconstruct(ps, params, ctx, jobs[i].input);
                 // The frame's .vdb and mesh appear together, after both were written.
                 io::OutputGroup outputs;

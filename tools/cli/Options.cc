@@ -198,6 +198,21 @@ void warnIfEmpty(const std::string& input, const ParticleSet& ps, const Rasteriz
                  input.c_str(), ps.size(), why.c_str());
 }
 
+ParticleSet readFrame(const PipelineOptions& o, Context& ctx, const std::string& path,
+                      const io::ReadOptions& read, io::ReadInfo& info, bool first,
+                      ReconstructParams& params)
+{
+    ctx.timing().clear();
+    ParticleSet ps;
+    {
+        const auto t = ctx.scope("read");
+        ps = io::readParticles(path, read, &info);
+    }
+    stopIfInterrupted(ctx);
+    if (first) params.radius = chooseSequenceRadius(o, ps);
+    return ps;
+}
+
 std::vector<std::pair<std::string, double>> fieldCounts(const RasterizeStats& s)
 {
     return {{"particles", double(s.particles)},

@@ -7,6 +7,7 @@
 #include <fluidsurf/Context.h>
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/Reconstruct.h>
+#include <fluidsurf/io/ParticleIO.h>
 
 #include <CLI/CLI.hpp>
 #include <tbb/global_control.h>
@@ -41,6 +42,13 @@ void addRunOptions(CLI::App* cmd, PipelineOptions& o, bool meshing);
 
 /// r for a sequence from its first frame, printed with its source (an estimate as "ESTIMATE").
 double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first);
+
+/// The start of every particle frame: a fresh timing tree, the timed read, a stop check, and on
+/// the first frame the sequence's radius into params.radius (one r for the whole sequence:
+/// surfaces of neighbouring frames must match).
+ParticleSet readFrame(const PipelineOptions& o, Context& ctx, const std::string& path,
+                      const io::ReadOptions& read, io::ReadInfo& info, bool first,
+                      ReconstructParams& params);
 
 /// On stderr: a non-empty frame gave no surface (no active voxel or no triangle); names the
 /// likely cause (r against the spacing estimate, or every particle isolated).
