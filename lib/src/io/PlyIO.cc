@@ -2,6 +2,7 @@
 // float or double; other vertex properties become attributes (properties named base_0, base_1,
 // ... are regrouped into one multi-component attribute, which is how the writer stores them).
 // Elements before "vertex" (and list properties) are read past; elements after it are ignored.
+#include "io/PlyHeader.h"
 #include "io/TextParse.h"
 
 #include <fluidsurf/Error.h>
@@ -11,113 +12,13 @@
 namespace fluidsurf {
 namespace io_internal {
 
-namespace {
-
-struct PlyType
-{
-    size_t size = 0;
-    bool isFloat = false, isSigned = false;
-};
-
-bool plyType(const std::string& n, PlyType& t)
-{
-    if (n == "char" || n == "int8")
-        t = {1, false, true};
-    else if (n == "uchar" || n == "uint8")
-        t = {1, false, false};
-    else if (n == "short" || n == "int16")
-        t = {2, false, true};
-    else if (n == "ushort" || n == "uint16")
-        t = {2, false, false};
-    else if (n == "int" || n == "int32")
-        t = {4, false, true};
-    else if (n == "uint" || n == "uint32")
-        t = {4, false, false};
-    else if (n == "float" || n == "float32")
-        t = {4, true, true};
-    else if (n == "double" || n == "float64")
-        t = {8, true, true};
-    else
-        return false;
-    return true;
-}
-
-struct PlyProperty
-{
-    std::string name;
-    PlyType type;
-    bool isList = false;
-    PlyType countType;
-};
-
-struct PlyElement
-{
-    std::string name;
-    uint64_t count = 0;
-    std::vector<PlyProperty> props;
-};
-
-double loadNumber(const uint8_t* p, const PlyType& t, bool be)
-{
-    if (t.isFloat) return t.size == 4 ? double(loadAs<float>(p, be)) : loadAs<double>(p, be);
-    switch (t.size) {
-    case 1:
-        return t.isSigned ? double(int8_t(*p)) : double(*p);
-    case 2:
-        return t.isSigned ? double(loadAs<int16_t>(p, be)) : double(loadAs<uint16_t>(p, be));
-    default:
-        return t.isSigned ? double(loadAs<int32_t>(p, be)) : double(loadAs<uint32_t>(p, be));
-    }
-}
-
-} // namespace
-
 ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
 {
     ByteReader in(data, size, src);
-    if (size < 4 || std::memcmp(data, "ply", 3) != 0 || (data[3] != '\n' && data[3] != '\r'))
-        in.failAt(0, "not a PLY file (missing 'ply' magic line)");
-    in.line("magic");
-    enum { Ascii, LE, BE } fmt = Ascii;
-    bool haveFormat = false;
-    std::vector<PlyElement> elements;
-    while (true) {
-        const auto w = splitWords(in.line("the PLY header"));
-        if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
-        if (w[0] == "end_header") break;
-        if (w[0] == "format") {
-            if (w.size() < 3) in.fail("incomplete format line");
-            if (w[1] == "ascii")
-                fmt = Ascii;
-            else if (w[1] == "binary_little_endian")
-                fmt = LE;
-            else if (w[1] == "binary_big_endian")
-                fmt = BE;
-            else
-                in.fail("unknown PLY format '" + w[1].substr(0, 40) + "'");
-            haveFormat = true;
-        } else if (w[0] == "element") {
-            if (w.size() < 3) in.fail("incomplete element line");
-            elements.push_back({w[1], parseCount(in, w[2], "element count"), {}});
-        } else if (w[0] == "property") {
-            if (elements.empty()) in.fail("property before any element");
-            PlyProperty p;
-            if (w.size() >= 5 && w[1] == "list") {
-                p.isList = true;
-                if (!plyType(w[2], p.countType) || !plyType(w[3], p.type) || p.countType.isFloat)
-                    in.fail("bad list property types '" + w[2] + " " + w[3] + "'");
-                p.name = w[4];
-            } else {
-                if (w.size() < 3 || !plyType(w[1], p.type)) in.fail("bad property line");
-                p.name = w[2];
-            }
-            elements.back().props.push_back(p);
-        } else {
-            in.fail("unexpected PLY header line '" + w[0].substr(0, 40) + "'");
-        }
-    }
-    if (!haveFormat) in.fail("PLY header has no format line");
-    const bool be = fmt == BE;
+    const PlyHeader header = readPlyHeader(in);
+    const std::vector<PlyElement>& elements = header.elements;
+    const PlyFormat fmt = header.format;
+    const bool be = fmt == PlyFormat::BigEndian;
 
     ParticleSet set;
     bool found = false;
@@ -141,10 +42,10 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
                 if (e.props[k].name == "z") iz = int(k);
             }
             if (ix < 0 || iy < 0 || iz < 0) in.fail("vertex element lacks x, y, z properties");
-            const size_t n =
-                in.checkedCount(e.count, fmt == Ascii ? 2 * e.props.size() : stride, "vertices");
+            const size_t n = in.checkedCount(
+                e.count, fmt == PlyFormat::Ascii ? 2 * e.props.size() : stride, "vertices");
             std::vector<double> values(n * e.props.size());
-            if (fmt == Ascii) {
+            if (fmt == PlyFormat::Ascii) {
                 for (size_t i = 0; i < values.size(); ++i)
                     values[i] = readAsciiNumber(in, "vertex data");
             } else {
@@ -152,7 +53,7 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
                 for (size_t i = 0; i < n; ++i)
                     for (const PlyProperty& prop : e.props) {
                         values[&prop - e.props.data() + i * e.props.size()] =
-                            loadNumber(p, prop.type, be);
+                            loadPlyNumber(p, prop.type, be);
                         p += prop.type.size;
                     }
             }
@@ -194,7 +95,7 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
             break;
         }
         // Skip an element that precedes the vertices.
-        if (fmt == Ascii) {
+        if (fmt == PlyFormat::Ascii) {
             const size_t n = in.checkedCount(e.count, 1, "elements");
             for (size_t i = 0; i < n; ++i)
                 for (const PlyProperty& p : e.props) {
@@ -214,8 +115,8 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
                 for (const PlyProperty& p : e.props) {
                     size_t items = 1;
                     if (p.isList)
-                        items = size_t(
-                            loadNumber(in.take(p.countType.size, "list count"), p.countType, be));
+                        items = size_t(loadPlyNumber(in.take(p.countType.size, "list count"),
+                                                     p.countType, be));
                     in.skip(in.checkedCount(items, p.type.size, "list items") * p.type.size,
                             "element data");
                 }
@@ -223,7 +124,8 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
     }
     if (!found) in.fail("PLY file has no vertex element");
     if (detail)
-        *detail = fmt == Ascii ? "ascii" : (be ? "binary big-endian" : "binary little-endian");
+        *detail =
+            fmt == PlyFormat::Ascii ? "ascii" : (be ? "binary big-endian" : "binary little-endian");
     return set;
 }
 
