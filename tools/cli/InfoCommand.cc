@@ -98,9 +98,12 @@ bool hasExtension(const std::string& path, const char* ext)
 /// The grids of a .vdb; true when one of them holds points (then the particle lines follow).
 bool printVdb(const std::string& path)
 {
-    const std::vector<io::GridDescription> grids = io::describeVdb(path);
+    std::vector<std::string> skipped;
+    const std::vector<io::GridDescription> grids = io::describeVdb(path, &skipped);
     std::printf("%s\n", path.c_str());
     std::printf("  format      OpenVDB, %zu grid%s\n", grids.size(), grids.size() == 1 ? "" : "s");
+    for (const std::string& s : skipped)
+        std::printf("  not read    %s\n", s.c_str());
     bool points = false;
     for (const io::GridDescription& g : grids) {
         points |= g.valueType == "ptdataidx32";

@@ -7,6 +7,7 @@
 #include "io/FileBuffer.h"
 #include "io/VdbGrids.h"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -40,6 +41,14 @@ openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string&
             path + ": no " +
             (gridName.empty() ? std::string("float grid") : "float grid named '" + gridName + "'") +
             " in this VDB (grids: " + (names.empty() ? std::string("none") : names) + ")");
+    const openvdb::Vec3d voxel = levelSet->voxelSize();
+    for (int a = 0; a < 3; ++a)
+        if (!(std::isfinite(voxel[a]) && voxel[a] > 0))
+            throw InputError(path + ": grid '" + levelSet->getName() + "' has voxel size " +
+                             std::to_string(voxel[a]) + " (positive and finite expected)");
+    if (!std::isfinite(levelSet->background()))
+        throw InputError(path + ": grid '" + levelSet->getName() +
+                         "' has a background that is not finite");
     return levelSet;
 }
 
@@ -91,11 +100,11 @@ void writeLevelSet(const openvdb::GridPtrVec& grids, const std::string& path)
     out.commit();
 }
 
-std::vector<GridDescription> describeVdb(const std::string& path)
+std::vector<GridDescription> describeVdb(const std::string& path, std::vector<std::string>* skipped)
 {
     const std::vector<uint8_t> bytes = io_internal::readFile(path);
     const openvdb::GridPtrVecPtr grids =
-        io_internal::readVdbGrids(bytes.data(), bytes.size(), path);
+        io_internal::readVdbGrids(bytes.data(), bytes.size(), path, skipped);
     std::vector<GridDescription> out;
     for (const openvdb::GridBase::Ptr& g : *grids) {
         GridDescription d;

@@ -1,17 +1,21 @@
-// VdbGrids.h - every grid of a .vdb held in memory, after our own structure checks (OpenVDB's
-// reader trusts the file; see VdbPointsIO.cc). Shared by the points reader and readLevelSet.
+// VdbGrids.h - every grid of a .vdb held in memory, after our own walk of its structure
+// (OpenVDB's reader trusts the file; see VdbCheck.cc). Shared by the points reader,
+// readLevelSet and describeVdb.
 #pragma once
 
 #include <openvdb/openvdb.h>
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace fluidsurf {
 namespace io_internal {
 
-/// InputError naming src for a file that is not a VDB, is truncated or corrupt.
-openvdb::GridPtrVecPtr readVdbGrids(const uint8_t* data, size_t size, const std::string& src);
+/// InputError naming src for a file that is not a VDB, is truncated or corrupt. Grids the walk
+/// cannot check (other tree types, frustum transforms) are left out and listed in skipped.
+openvdb::GridPtrVecPtr readVdbGrids(const uint8_t* data, size_t size, const std::string& src,
+                                    std::vector<std::string>* skipped = nullptr);
 
 } // namespace io_internal
 } // namespace fluidsurf

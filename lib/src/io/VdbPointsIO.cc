@@ -5,50 +5,22 @@
 // of the float32 world coordinates, the offset keeps all 24 mantissa bits, and converting back
 // in double reproduces the original float exactly. Point order is not part of a VDB (points
 // are bucketed by voxel), so a round trip keeps each particle, not their order.
-#include "io/ByteReader.h"
 #include "io/Formats.h"
 #include "io/VdbGrids.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/io/AtomicFile.h>
 
-#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/points/PointConversion.h>
 #include <openvdb/points/PointDataGrid.h>
 
 #include <cmath>
-#include <sstream>
-#include <streambuf>
 
 namespace fluidsurf {
 namespace io_internal {
 
 namespace {
-
-/// Read-only streambuf over a memory block (no copy of the file).
-struct MemoryBuf : std::streambuf
-{
-    MemoryBuf(const uint8_t* d, size_t n)
-    {
-        char* p = const_cast<char*>(reinterpret_cast<const char*>(d));
-        setg(p, p, p + n);
-    }
-    pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override
-    {
-        char* target = (dir == std::ios_base::beg   ? eback()
-                        : dir == std::ios_base::cur ? gptr()
-                                                    : egptr()) +
-                       off;
-        if (target < eback() || target > egptr()) return pos_type(off_type(-1));
-        setg(eback(), target, egptr());
-        return pos_type(target - eback());
-    }
-    pos_type seekpos(pos_type pos, std::ios_base::openmode m) override
-    {
-        return seekoff(off_type(pos), std::ios_base::beg, m);
-    }
-};
 
 template <typename T>
 void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx, int stride,
@@ -59,132 +31,7 @@ void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx
         out[c] = h.get(idx, openvdb::Index(c));
 }
 
-/// OpenVDB's reader trusts the file: on a truncated file it sizes allocations from whatever
-/// bytes it finds (gigabytes seen here). Before handing the bytes over, walk the header and the
-/// grid descriptors ourselves and check every grid's recorded end offset against the real size.
-/// Files without grid offsets (written by io::Stream) only get the header checks.
-/// Each grid's metadata and transform type are walked too (bounded by the grid's end offset),
-/// and for point grids the root node's tile and child counts (a corrupt count made OpenVDB 10.0
-/// loop for minutes). Known limit: corruption deeper in the tree (internal-node masks, leaf
-/// buffers) still reaches OpenVDB; absurd sizes there surface as std::bad_alloc, reported below
-/// as a corrupt file. Closing that fully needs a topology reader of our own.
-/// Length-prefixed string; returns it (callers need the grid type and transform name).
-std::string readVdbString(ByteReader& in, const char* what)
-{
-    const int32_t len = in.read<int32_t>(false, what);
-    if (len < 0) in.fail(std::string("negative length of ") + what);
-    const uint8_t* p = in.take(size_t(len), what);
-    return std::string(reinterpret_cast<const char*>(p), size_t(len));
-}
-
-/// A MetaMap: count, then (name, type name, value) length-prefixed strings; names non-empty.
-void skipVdbMetaMap(ByteReader& in, const char* what)
-{
-    const int32_t count = in.read<int32_t>(false, what);
-    if (count < 0 || size_t(count) > in.remaining() / 12)
-        in.fail(std::string("corrupt ") + what + " " + std::to_string(count));
-    for (int32_t m = 0; m < count; ++m) {
-        if (readVdbString(in, "metadata name").empty()) in.fail("empty metadata name");
-        readVdbString(in, "metadata type");
-        readVdbString(in, "metadata value");
-    }
-}
-
-/// One grid's own bytes (a reader bounded by its end offset, positioned at its start):
-/// compression flags, grid metadata, transform type and, for point grids, the root node's tile
-/// and child counts (a corrupt count makes OpenVDB loop for minutes).
-void checkVdbGrid(ByteReader& in, const std::string& gridType)
-{
-    in.skip(4, "grid compression flags");
-    skipVdbMetaMap(in, "grid metadata count");
-    const std::string map = readVdbString(in, "transform type");
-    if (map.size() < 4 || map.size() > 64 || map.compare(map.size() - 3, 3, "Map") != 0)
-        in.fail("corrupt transform type '" + map.substr(0, 40) + "'");
-    // Serialized sizes of the fixed-size maps (their read() in openvdb/math/Maps.h).
-    static const std::pair<const char*, size_t> kMapBytes[] = {
-        {"UniformScaleMap", 120},   {"ScaleMap", 120},      {"UniformScaleTranslateMap", 144},
-        {"ScaleTranslateMap", 144}, {"TranslationMap", 24}, {"AffineMap", 128},
-        {"UnitaryMap", 128}};
-    size_t mapBytes = 0;
-    for (const auto& [name, bytes] : kMapBytes)
-        if (map == name) mapBytes = bytes;
-    if (!mapBytes || gridType != "Tree_ptdataidx32_5_4_3") return;
-    in.skip(mapBytes, "transform");
-    const int32_t buffers = in.read<int32_t>(false, "tree buffer count");
-    if (buffers != 1) in.fail("corrupt tree buffer count " + std::to_string(buffers));
-    in.skip(4, "root background");
-    const uint64_t tiles = in.read<uint32_t>(false, "root tile count");
-    const uint64_t children = in.read<uint32_t>(false, "root child count");
-    // a tile is 17 bytes; a child at least its origin and two 32^3-bit masks
-    if (tiles * 17 + children * (12 + 2 * 4096) > in.remaining())
-        in.fail("corrupt root node: " + std::to_string(tiles) + " tiles and " +
-                std::to_string(children) + " children do not fit in the grid");
-}
-
-void checkVdbStructure(const uint8_t* data, size_t size, const std::string& src)
-{
-    ByteReader in(data, size, src);
-    in.skip(8, "VDB magic");
-    const uint32_t version = in.read<uint32_t>(false, "file version");
-    if (version < 222 || version > 1000)
-        in.failAt(8, "unsupported VDB file version " + std::to_string(version) +
-                         " (222 or newer expected)");
-    in.skip(8, "library version");
-    const bool hasOffsets = *in.take(1, "grid offsets flag") != 0;
-    in.skip(36, "UUID");
-    skipVdbMetaMap(in, "file metadata count");
-    if (!hasOffsets) return;
-    const int32_t grids = in.read<int32_t>(false, "grid count");
-    if (grids < 0 || size_t(grids) > in.remaining() / 36)
-        in.fail("corrupt grid count " + std::to_string(grids));
-    for (int32_t g = 0; g < grids; ++g) {
-        readVdbString(in, "grid name");
-        const std::string gridType = readVdbString(in, "grid type");
-        readVdbString(in, "grid instance parent");
-        const int64_t gridPos = in.read<int64_t>(false, "grid offset");
-        const int64_t blockPos = in.read<int64_t>(false, "grid block offset");
-        const int64_t endPos = in.read<int64_t>(false, "grid end offset");
-        if (!(gridPos > 0 && gridPos <= blockPos && blockPos <= endPos))
-            in.fail("corrupt grid offsets in descriptor " + std::to_string(g));
-        if (uint64_t(endPos) > size)
-            in.fail("grid " + std::to_string(g) + " ends at byte " + std::to_string(endPos) +
-                    " but the file has " + std::to_string(size) + " bytes (truncated file?)");
-        ByteReader grid(data, size_t(endPos), src);
-        grid.seek(size_t(gridPos));
-        checkVdbGrid(grid, gridType);
-    }
-}
-
-std::string shortened(const std::string& s)
-{
-    return s.size() > 200 ? s.substr(0, 200) + "..." : s;
-}
-
 } // namespace
-
-openvdb::GridPtrVecPtr readVdbGrids(const uint8_t* data, size_t size, const std::string& src)
-{
-    openvdb::initialize();
-    if (size < 8 || !(data[0] == 0x20 && data[1] == 0x42 && data[2] == 0x44 && data[3] == 0x56))
-        throw InputError(src + ": not an OpenVDB file (missing VDB magic) (at byte 0)");
-    checkVdbStructure(data, size, src);
-    try {
-        MemoryBuf buf(data, size);
-        std::istream stream(&buf);
-        // Make short reads throw. This covers only the reads io::Stream does on this stream (the
-        // header); it hands the grids to an internal io::File with a stream of its own, which is
-        // why checkVdbStructure() runs first.
-        stream.exceptions(std::ios::failbit | std::ios::badbit | std::ios::eofbit);
-        openvdb::io::Stream vdb(stream);
-        return vdb.getGrids();
-    } catch (const std::ios_base::failure&) {
-        throw InputError(src + ": VDB data ends early (truncated file?)");
-    } catch (const std::bad_alloc&) {
-        throw InputError(src + ": corrupt VDB (a size field asks for more memory than available)");
-    } catch (const std::exception& e) {
-        throw InputError(src + ": cannot read VDB: " + shortened(e.what()));
-    }
-}
 
 ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src,
                           std::string* detail)

@@ -12,7 +12,8 @@ namespace fluidsurf {
 namespace io {
 
 /// Read a level set from a .vdb file: the float grid named gridName, or (empty name) the first
-/// grid of class level set, else the first float grid. InputError naming the file otherwise.
+/// grid of class level set, else the first float grid. InputError naming the file otherwise,
+/// also for a grid no mesher can use (voxel size or background not positive and finite).
 openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string& gridName = "");
 
 /// Write grids to a .vdb (Blosc), atomically (temporary file + rename). The file's UUID is
@@ -33,7 +34,10 @@ struct GridDescription
 };
 
 /// Every grid of a .vdb file (read whole, validated like every reader). InputError otherwise.
-std::vector<GridDescription> describeVdb(const std::string& path);
+/// Grids of types fluidsurf does not check (bool, mask, string trees; frustum transforms) are
+/// not read; each is listed in skipped as "name (type): why".
+std::vector<GridDescription> describeVdb(const std::string& path,
+                                         std::vector<std::string>* skipped = nullptr);
 
 } // namespace io
 } // namespace fluidsurf
