@@ -119,8 +119,10 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
                 want *= 16;
             }
         }
-        if (!complete && inflated.size() < needed)
-            inflated = gunzipPrefix(data, size, src, needed, complete);
+        // Then exactly the points, and the rest only as far as the CRC: primitives and groups
+        // after the points are smaller than the points for particles, so more is a bomb.
+        if (!complete)
+            inflated = gunzipPrefix(data, size, src, needed, complete, needed + (size_t(1) << 26));
         data = inflated.data();
         size = inflated.size();
     }

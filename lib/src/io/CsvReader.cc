@@ -126,6 +126,9 @@ ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, st
             values.push_back(v);
         }
     }
+    // A header and nothing else is an empty file in a text format's clothes (an empty .xyz
+    // is refused the same way): say so, in info too.
+    if (values.empty()) in.failAt(0, header.empty() ? "no data rows" : "a header and no data rows");
     if (columns == 0 && !header.empty()) columns = header.size();
     int axis[3] = {0, 1, 2};
     std::vector<std::string> names(columns);

@@ -54,14 +54,17 @@ bool isGzip(const uint8_t* data, size_t size)
 
 namespace {
 /// Inflate until the stream ends or `stop` bytes are out (complete: the stream ended); past
-/// maxOutput without ending is an error.
+/// maxOutput without ending is an error. With checkTail, the rest of the stream is inflated into
+/// a scratch buffer and dropped, so that zlib reaches the CRC (a flipped byte inside the data is
+/// an error, not different particles); more than checkTail bytes past stop is an error too.
 std::vector<uint8_t> inflateGzip(const uint8_t* data, size_t size, const std::string& source,
-                                 size_t maxOutput, size_t stop, bool& complete)
+                                 size_t maxOutput, size_t stop, bool& complete,
+                                 size_t checkTail = 0)
 {
     complete = false;
     z_stream zs{};
     if (inflateInit2(&zs, 15 + 16) != Z_OK) throw InputError(source + ": zlib init failed");
-    std::vector<uint8_t> out;
+    std::vector<uint8_t> out, scratch;
     out.resize(std::min(std::max<size_t>(size * 3, 1 << 16), std::max<size_t>(stop, 1)));
     zs.next_in = const_cast<Bytef*>(data);
     size_t consumed = 0;
@@ -74,18 +77,30 @@ std::vector<uint8_t> inflateGzip(const uint8_t* data, size_t size, const std::st
             zs.avail_in = uInt(slice);
             consumed += slice;
         }
-        if (zs.total_out >= stop) break; // as much as the caller can use
-        if (zs.total_out == out.size()) {
-            if (out.size() >= maxOutput) {
+        if (zs.total_out >= stop) { // as much as the caller can use
+            if (!checkTail) break;
+            if (zs.total_out - stop > checkTail) {
                 inflateEnd(&zs);
-                throw InputError(source + ": gzip data expands beyond " +
-                                 std::to_string(maxOutput) + " bytes");
+                throw InputError(source + ": gzip data goes on for more than " +
+                                 std::to_string(checkTail) +
+                                 " bytes past what the header promises (corrupt or a bomb)");
             }
-            out.resize(std::min({out.size() * 2, maxOutput, stop}));
+            scratch.resize(1 << 16);
+            zs.next_out = scratch.data();
+            zs.avail_out = uInt(scratch.size());
+        } else {
+            if (zs.total_out == out.size()) {
+                if (out.size() >= maxOutput) {
+                    inflateEnd(&zs);
+                    throw InputError(source + ": gzip data expands beyond " +
+                                     std::to_string(maxOutput) + " bytes");
+                }
+                out.resize(std::min({out.size() * 2, maxOutput, stop}));
+            }
+            const size_t room = std::min<size_t>(out.size() - zs.total_out, 1u << 30);
+            zs.next_out = out.data() + zs.total_out;
+            zs.avail_out = uInt(room);
         }
-        const size_t room = std::min<size_t>(out.size() - zs.total_out, 1u << 30);
-        zs.next_out = out.data() + zs.total_out;
-        zs.avail_out = uInt(room);
         ret = inflate(&zs, Z_NO_FLUSH);
         if (ret == Z_STREAM_END) {
             complete = true;
@@ -118,9 +133,9 @@ std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string&
 }
 
 std::vector<uint8_t> gunzipPrefix(const uint8_t* data, size_t size, const std::string& source,
-                                  size_t want, bool& complete)
+                                  size_t want, bool& complete, size_t checkTail)
 {
-    return inflateGzip(data, size, source, size_t(1) << 36, want, complete);
+    return inflateGzip(data, size, source, size_t(1) << 36, want, complete, checkTail);
 }
 
 void zlibInflate(const uint8_t* src, size_t srcSize, uint8_t* dst, size_t dstSize,

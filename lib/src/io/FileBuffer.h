@@ -26,8 +26,10 @@ std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string&
 
 /// The first `want` bytes of a gzip stream (fewer when it ends sooner; complete says whether the
 /// whole stream fitted): a reader inflates only what its header promises, never a bomb's tail.
+/// checkTail > 0: the rest is inflated and dropped up to the CRC (complete is then true), and
+/// more than checkTail bytes of it is an InputError.
 std::vector<uint8_t> gunzipPrefix(const uint8_t* data, size_t size, const std::string& source,
-                                  size_t want, bool& complete);
+                                  size_t want, bool& complete, size_t checkTail = 0);
 
 /// Inflate one zlib block whose decompressed size is known (VTK XML blocks).
 void zlibInflate(const uint8_t* src, size_t srcSize, uint8_t* dst, size_t dstSize,

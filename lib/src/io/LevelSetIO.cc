@@ -19,8 +19,13 @@ namespace io {
 openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string& gridName)
 {
     const std::vector<uint8_t> bytes = io_internal::readFile(path);
-    const openvdb::GridPtrVecPtr grids =
-        io_internal::readVdbGrids(bytes.data(), bytes.size(), path);
+    return readLevelSetFromMemory(bytes.data(), bytes.size(), path, gridName);
+}
+
+openvdb::FloatGrid::Ptr readLevelSetFromMemory(const uint8_t* data, size_t size,
+                                               const std::string& path, const std::string& gridName)
+{
+    const openvdb::GridPtrVecPtr grids = io_internal::readVdbGrids(data, size, path);
     openvdb::FloatGrid::Ptr levelSet, anyFloat;
     std::string names;
     for (const openvdb::GridBase::Ptr& g : *grids) {

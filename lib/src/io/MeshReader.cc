@@ -18,9 +18,9 @@ using io_internal::ByteReader;
 
 namespace {
 
-TriangleMesh readObj(const std::vector<uint8_t>& bytes, const std::string& path)
+TriangleMesh readObj(const uint8_t* data, size_t size, const std::string& path)
 {
-    ByteReader in(bytes.data(), bytes.size(), path);
+    ByteReader in(data, size, path);
     TriangleMesh m;
     std::vector<Vec3f> normals;
     size_t lineNo = 0;
@@ -67,9 +67,9 @@ TriangleMesh readObj(const std::vector<uint8_t>& bytes, const std::string& path)
     return m;
 }
 
-TriangleMesh readPly(const std::vector<uint8_t>& bytes, const std::string& path)
+TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path)
 {
-    ByteReader in(bytes.data(), bytes.size(), path);
+    ByteReader in(data, size, path);
     const io_internal::PlyHeader header = io_internal::readPlyHeader(in);
     const io_internal::PlyFormat format = header.format;
     TriangleMesh m;
@@ -143,18 +143,29 @@ TriangleMesh readPly(const std::vector<uint8_t>& bytes, const std::string& path)
 
 } // namespace
 
+TriangleMesh readMeshFromMemory(const uint8_t* data, size_t size, MeshFormat format,
+                                const std::string& source)
+{
+    if (size == 0 && (format == MeshFormat::Obj || format == MeshFormat::Ply))
+        throw InputError(source + ": file is empty");
+    switch (format) {
+    case MeshFormat::Obj:
+        return readObj(data, size, source);
+    case MeshFormat::Ply:
+        return readPly(data, size, source);
+    default:
+        throw InputError(source + ": cannot read this mesh type (readable: .obj .ply; .vtk "
+                                  "meshes are written only)");
+    }
+}
+
 TriangleMesh readMesh(const std::string& path)
 {
+    const MeshFormat format = meshFormatFromPath(path);
+    if (format != MeshFormat::Obj && format != MeshFormat::Ply)
+        return readMeshFromMemory(nullptr, 0, format, path); // the error, before any read
     const std::vector<uint8_t> bytes = io_internal::readFile(path);
-    switch (meshFormatFromPath(path)) {
-    case MeshFormat::Obj:
-        return readObj(bytes, path);
-    case MeshFormat::Ply:
-        return readPly(bytes, path);
-    default:
-        throw InputError(path + ": cannot read this mesh type (readable: .obj .ply; .vtk meshes "
-                                "are written only)");
-    }
+    return readMeshFromMemory(bytes.data(), bytes.size(), format, path);
 }
 
 } // namespace io

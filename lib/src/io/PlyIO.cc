@@ -46,8 +46,10 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
                 e.count, fmt == PlyFormat::Ascii ? 2 * e.props.size() : stride, "vertices");
             std::vector<double> values(n * e.props.size());
             if (fmt == PlyFormat::Ascii) {
-                for (size_t i = 0; i < values.size(); ++i)
+                for (size_t i = 0; i < values.size(); ++i) {
                     values[i] = readAsciiNumber(in, "vertex data");
+                    if ((i + 1) % e.props.size() == 0) expectLineEnd(in, "vertex data");
+                }
             } else {
                 const uint8_t* p = in.take(n * stride, "vertex data");
                 for (size_t i = 0; i < n; ++i)

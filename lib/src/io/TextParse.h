@@ -62,6 +62,19 @@ inline double readAsciiNumber(ByteReader& in, const char* what)
     return v;
 }
 
+/// After an ASCII record: nothing but blanks up to the end of its line, so a record with a value
+/// too many or too few is an error where it is, instead of shifting every record after it.
+inline void expectLineEnd(ByteReader& in, const char* what)
+{
+    const uint8_t* d = in.data();
+    size_t p = in.offset();
+    while (p < in.size() && (d[p] == ' ' || d[p] == '\t' || d[p] == '\r'))
+        ++p;
+    if (p < in.size() && d[p] != '\n')
+        in.failAt(p, std::string("more values than properties on a line of ") + what);
+    in.seek(p < in.size() ? p + 1 : p);
+}
+
 /// Multiply counts from a header, failing (instead of wrapping) on absurd values.
 inline uint64_t mulChecked(const ByteReader& in, uint64_t a, uint64_t b, const char* what)
 {

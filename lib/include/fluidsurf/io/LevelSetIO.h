@@ -16,6 +16,11 @@ namespace io {
 /// also for a grid no mesher can use (voxel size or background not positive and finite).
 openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string& gridName = "");
 
+/// The same from the bytes of a .vdb in memory; source names them in errors.
+openvdb::FloatGrid::Ptr readLevelSetFromMemory(const uint8_t* data, size_t size,
+                                               const std::string& source,
+                                               const std::string& gridName = "");
+
 /// Write grids to a .vdb (Blosc), atomically (temporary file + rename). The file's UUID is
 /// derived from its content, so equal grids give byte-identical files. OutputError on failure.
 void writeLevelSet(const openvdb::GridPtrVec& grids, const std::string& path);

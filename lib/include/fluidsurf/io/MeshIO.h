@@ -5,6 +5,8 @@
 
 #include <fluidsurf/Mesh.h>
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
 
 namespace fluidsurf {
@@ -20,6 +22,10 @@ void writeMesh(const TriangleMesh& mesh, const std::string& path);
 /// Read an OBJ or PLY mesh (polygons fanned into triangles; normals kept when there is one per
 /// vertex). InputError naming the file, the problem and where (line or byte).
 TriangleMesh readMesh(const std::string& path);
+
+/// The same from bytes in memory (format Obj or Ply); source names them in errors.
+TriangleMesh readMeshFromMemory(const uint8_t* data, size_t size, MeshFormat format,
+                                const std::string& source);
 
 } // namespace io
 } // namespace fluidsurf
