@@ -193,6 +193,9 @@ for stem, name in (("vtk", "frame.vtk"), ("cube", "cube_2366_particles.vtk")):
     add(stem + "_dataset.vtk", re.sub(rb"DATASET \w+", b"DATASET RECTILINEAR_GRIB", vtk, 1), "unknown dataset")
     add(stem + "_type.vtk", re.sub(rb"(POINTS \d+) \w+", rb"\1 quaternion", vtk, 1), "unknown value type")
     add(stem + "_encoding.vtk", re.sub(rb"\nBINARY\n", b"\nBINARX\n", vtk, 1), "unknown encoding")
+if os.path.exists(S("cube_2366_particles.vtk")):
+    cube = read(S("cube_2366_particles.vtk"))
+    add("cube_cut_celltypes.vtk", cube[:cube.index(b"CELL_TYPES")], "cut right before CELL_TYPES (point data lost)")
 for stem, name in (("vtk", "frame.vtk"),):
     vtk = read(S(name))
     add(stem + "_nan.vtk", first_float_as(vtk, ">f", float("nan")), "NaN position")
@@ -209,6 +212,10 @@ for stem, name in (("vtu", "fluid_250_particles.vtu"), ("vtu64", "fluid_encoded_
     add(stem + "_type.vtu", replaced(vtu, b'type="Float64"', b'type="Float96"'), "unknown value type")
     add(stem + "_offset.vtu", re.sub(rb'offset="\s*0\s*"', b'offset="99999999"', vtu, 1), "offset past the data")
     add(stem + "_no_end.vtu", vtu[:vtu.index(b"</VTKFile>")], "root element never closed")
+    if stem == "vtu64":
+        at = vtu.index(b"_", vtu.index(b"<AppendedData")) + 1 + 30
+        add("vtu64_char.vtu", vtu[:at] + b"!" + vtu[at + 1:], "invalid character in base64")
+        add("vtu64_pad.vtu", vtu[:at] + b"=" + vtu[at + 1:], "'=' inside a base64 quad")
     if b"vtkZLibDataCompressor" in vtu:
         add(stem + "_compressor.vtu", replaced(vtu, b"vtkZLibDataCompressor", b"vtkLZ4DataCompressor"),
             "unsupported compressor")

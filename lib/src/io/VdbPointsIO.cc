@@ -31,6 +31,45 @@ void copyValues(const openvdb::points::AttributeArray& array, openvdb::Index idx
         out[c] = h.get(idx, openvdb::Index(c));
 }
 
+std::string originText(const openvdb::Coord& c)
+{
+    return "(" + std::to_string(c.x()) + ", " + std::to_string(c.y()) + ", " +
+           std::to_string(c.z()) + ")";
+}
+
+/// What the loop below trusts of each leaf, checked first: OpenVDB reads the voxel offsets and
+/// the attribute arrays of a leaf without comparing them, and indexes the arrays with the
+/// offsets (an assertion, or a read past the array, on a corrupt file).
+void checkPointLeaves(const openvdb::points::PointDataGrid& grid,
+                      const openvdb::points::AttributeSet::Descriptor& desc, const std::string& src)
+{
+    const std::string where = src + ": corrupt VDB points (grid '" + grid.getName() + "'): ";
+    auto first = grid.tree().cbeginLeaf();
+    for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
+        const openvdb::points::AttributeSet& set = leaf->attributeSet();
+        if (set.descriptor().map() != desc.map())
+            throw InputError(src + ": leaves of grid '" + grid.getName() +
+                             "' carry different attributes");
+        openvdb::Index end = 0;
+        for (openvdb::Index v = 0; v < leaf->SIZE; ++v) {
+            if (leaf->getValue(v) < end)
+                throw InputError(where + "voxel point offsets decrease in leaf at " +
+                                 originText(leaf->origin()));
+            end = leaf->getValue(v);
+        }
+        for (size_t a = 0; a < set.size(); ++a) {
+            const openvdb::points::AttributeArray* array = set.getConst(a);
+            const openvdb::points::AttributeArray* model = first->attributeSet().getConst(a);
+            if (!array || !model || !array->hasConstantStride() ||
+                array->stride() != model->stride() || array->type() != model->type() ||
+                (!array->isUniform() && array->size() < end))
+                throw InputError(where + "attribute arrays do not match the leaf's " +
+                                 std::to_string(end) + " points in leaf at " +
+                                 originText(leaf->origin()));
+        }
+    }
+}
+
 } // namespace
 
 ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src,
@@ -105,10 +144,8 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
                                                                                       : c.stride;
     };
 
+    checkPointLeaves(*grid, desc, src);
     for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
-        if (leaf->attributeSet().descriptor().map() != desc.map())
-            throw InputError(src + ": leaves of grid '" + grid->getName() +
-                             "' carry different attributes");
         openvdb::points::AttributeHandle<openvdb::Vec3f> ph(leaf->constAttributeArray(posIndex));
         for (auto idx = leaf->beginIndexAll(); idx; ++idx) {
             const openvdb::Vec3d voxel = idx.getCoord().asVec3d();

@@ -97,7 +97,7 @@ public:
 
         bool havePoints = false;
         enum { None, Points, Cells } scope = None;
-        uint64_t cellCount = 0;
+        uint64_t cellCount = 0, unstructuredCells = 0; // CELLS waiting for their CELL_TYPES
         std::vector<std::string> w;
         while (nextLineOrEnd(w)) {
             const std::string key = lower(w[0]);
@@ -108,11 +108,15 @@ public:
             } else if (key == "vertices" || key == "lines" || key == "polygons" ||
                        key == "triangle_strips" || key == "cells") {
                 skipCells(w);
+                if (key == "cells") unstructuredCells = parseCount(in, w[1], "cell count");
             } else if (key == "cell_types") {
                 need(w, 2);
-                skipValues(
-                    mulChecked(in, parseCount(in, w[1], "CELL_TYPES count"), 1, "CELL_TYPES"),
-                    VtkType::Int32, "CELL_TYPES");
+                const uint64_t types = parseCount(in, w[1], "CELL_TYPES count");
+                if (types != unstructuredCells)
+                    fail("CELL_TYPES " + w[1] + " does not match CELLS " +
+                         std::to_string(unstructuredCells));
+                skipValues(types, VtkType::Int32, "CELL_TYPES");
+                unstructuredCells = 0;
             } else if (key == "point_data") {
                 need(w, 2);
                 if (!havePoints) fail("POINT_DATA before POINTS");
@@ -133,6 +137,10 @@ public:
             }
         }
         if (!havePoints) fail("no POINTS section");
+        // An unstructured grid's cells need their types: a file that ends between the two was
+        // cut, and whatever followed (point data) is lost.
+        if (unstructuredCells)
+            fail("CELLS without CELL_TYPES: the file ends early (truncated?), point data lost");
         return std::move(mSet);
     }
 

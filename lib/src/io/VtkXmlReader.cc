@@ -323,10 +323,21 @@ private:
                            lastSize = headerValue(h + 2 * mHeaderSize);
             const uint64_t expect =
                 blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize ? lastSize : blockSize);
-            if (expect != bytes)
+            // (the block size is nominal, often above the data; the product must not wrap)
+            if ((blocks > 0 && blockSize == 0) || lastSize > blockSize ||
+                (blocks > 1 && blocks - 1 > bytes / blockSize) || expect != bytes)
                 in.failAt(a.tag.begin, "zlib blocks of '" + attr(a.tag, "Name") + "' hold " +
                                            std::to_string(expect) + " bytes, expected " +
                                            std::to_string(bytes));
+            // Deflate expands at most 1032:1: a header that promises more than its compressed
+            // blocks can hold is refused before the output is allocated.
+            uint64_t capacity = 0;
+            for (uint64_t b = 0; b < blocks; ++b)
+                capacity += 1032 * headerValue(h + mHeaderSize * (3 + b)) + 64;
+            if (capacity < bytes)
+                in.failAt(a.tag.begin, "zlib blocks of '" + attr(a.tag, "Name") + "' (" +
+                                           std::to_string(p.size()) + " bytes) cannot inflate to " +
+                                           std::to_string(bytes) + " bytes");
             raw.resize(bytes);
             size_t src = mHeaderSize * (3 + size_t(blocks)), dst = 0;
             for (uint64_t b = 0; b < blocks; ++b) {

@@ -118,7 +118,12 @@ bool decodeBase64(const uint8_t* text, size_t length, std::string& out, size_t m
         quad[k++] = v;
         if (k < 4) continue;
         k = 0;
-        if (quad[0] < 0 || quad[1] < 0) return false;
+        // '=' pads the end of a quad only: x y = = or x y z =. (VTK concatenates separately
+        // padded blocks, so a padded quad may be followed by more data.)
+        if (quad[0] < 0 || quad[1] < 0 || (quad[2] < 0 && quad[3] >= 0)) {
+            if (charsUsed) *charsUsed = i;
+            return false;
+        }
         const uint32_t bits = (uint32_t(quad[0]) << 18) | (uint32_t(quad[1]) << 12) |
                               (uint32_t(quad[2] < 0 ? 0 : quad[2]) << 6) |
                               uint32_t(quad[3] < 0 ? 0 : quad[3]);
