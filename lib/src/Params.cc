@@ -63,9 +63,19 @@ void Params::validate() const
     if (voxelSize < radius / 64)
         throw ValueError("voxel size below r/64 is not supported (got " +
                          std::to_string(voxelSize / radius) + " r)");
-    if (influenceRadius > 1000 * voxelSize)
-        throw ValueError("influence radius above 1000 voxels is not supported (got " +
-                         std::to_string(influenceRadius / voxelSize) + " voxels)");
+    // Lengths in voxels index loops and stencils (int32 index space, per-voxel neighbour
+    // searches): past 1000 voxels the work explodes long before anything overflows, so each
+    // length is bounded there, and the message gives the range.
+    const std::pair<double, const char*> lengths[] = {{influenceRadius, "influence radius R"},
+                                                      {smoothingLength, "smoothing length h"},
+                                                      {bandWidth, "band width"},
+                                                      {halfWidth * voxelSize, "half width"}};
+    for (const auto& [length, name] : lengths)
+        if (length > 1000 * voxelSize)
+            throw ValueError(std::string(name) + " above 1000 voxels is not supported (got " +
+                             std::to_string(length / voxelSize) +
+                             " voxels; the range is (0, 1000] voxels of " +
+                             std::to_string(voxelSize) + ")");
 }
 
 const char* fieldName(FieldKind f)

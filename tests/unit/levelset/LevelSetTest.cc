@@ -78,6 +78,23 @@ TEST(LevelSet, InvalidParametersAreRejected)
     p = Params::fromRadius(sp.radius);
     p.voxelSize = sp.radius / 32, p.influenceRadius = 1001 * p.voxelSize; // a huge kernel
     EXPECT_THROW(rasterizeParticles(ps, p), ValueError);
+    for (double Params::*length : {&Params::smoothingLength, &Params::bandWidth}) {
+        p = Params::fromRadius(sp.radius);
+        p.*length = 1001 * p.voxelSize; // each length in voxels is bounded, with the range named
+        try {
+            rasterizeParticles(ps, p);
+            ADD_FAILURE() << "no error";
+        } catch (const ValueError& e) {
+            EXPECT_NE(std::string(e.what()).find("the range is (0, 1000] voxels"),
+                      std::string::npos)
+                << e.what();
+        }
+        p.*length = 1000 * p.voxelSize; // the end of the range is allowed
+        EXPECT_NO_THROW(p.validate());
+    }
+    p = Params::fromRadius(sp.radius);
+    p.halfWidth = 1001;
+    EXPECT_THROW(rasterizeParticles(ps, p), ValueError);
     // One stray particle beyond the grid's reach is isolated (ReconstructTest); a far cluster,
     // which is fluid, cannot be gridded with the rest and says so.
     ParticleSet far;
