@@ -15,6 +15,16 @@ namespace {
 using util::kLanes;
 using util::Lanes;
 
+/// A particle closer than this many h (per axis) to the last one of its cell whose sums were
+/// computed shares them (2^-12 h: 1e-3 r for h = 4r).
+constexpr double kSameSpot = 1.0 / 4096;
+
+bool sameSpot(const Vec3f& a, const Vec3f& b, float tolerance)
+{
+    return std::fabs(a.x - b.x) <= tolerance && std::fabs(a.y - b.y) <= tolerance &&
+           std::fabs(a.z - b.z) <= tolerance;
+}
+
 struct Neighbourhood
 {
     std::vector<float> x, y, z, v; // candidates of one cell, padded to a multiple of kLanes
@@ -95,18 +105,22 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
                 });
                 nb.pad();
                 const size_t m = nb.x.size();
+                uint32_t computed = b;
                 for (uint32_t i = b; i < e; ++i) {
                     const Vec3f& p = index.positions[i];
-                    // A particle at exactly the previous one's position has exactly its sums:
-                    // coincident particles (a degenerate frame piles 1e5 on one point) cost one
-                    // neighbourhood pass per run instead of one each.
-                    if (i > b && p == index.positions[i - 1]) {
-                        out.neighbours[i] = out.neighbours[i - 1];
-                        out.colorField[i] = out.colorField[i - 1];
-                        out.colorGradient[i] = out.colorGradient[i - 1];
-                        out.classes[i] = out.classes[i - 1];
+                    // A particle at the spot of the last computed one has its sums: coincident
+                    // particles (a degenerate frame piles 1e5 on one point, often with a little
+                    // noise) cost one neighbourhood pass per spot instead of one each. No two
+                    // particles of a real fluid come within kSameSpot * h of each other, so
+                    // real frames are computed particle by particle as before.
+                    if (i > b && sameSpot(p, index.positions[computed], float(h * kSameSpot))) {
+                        out.neighbours[i] = out.neighbours[computed];
+                        out.colorField[i] = out.colorField[computed];
+                        out.colorGradient[i] = out.colorGradient[computed];
+                        out.classes[i] = out.classes[computed];
                         continue;
                     }
+                    computed = i;
                     const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y),
                                 pz = float(double(p.z) - o.z);
                     Lanes count{}, cf{}, gx{}, gy{}, gz{};
