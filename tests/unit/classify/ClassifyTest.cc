@@ -18,6 +18,22 @@ classify::Classification classifyScene(const ParticleSet& ps, const Params& p,
         neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength, ctx);
     return classify::classifyParticles(index, p, ctx);
 }
+
+/// Uniform in [-0.5, 0.5) from a 64-bit LCG (the same numbers on every platform).
+double uniform(uint64_t& seed)
+{
+    seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+    return double(seed >> 11) / 9007199254740992.0 - 0.5;
+}
+
+/// Neighbours within h of each particle, in file order, by brute force.
+std::vector<int> bruteForceCounts(const ParticleSet& ps, double h)
+{
+    std::vector<std::array<double, 3>> pts;
+    for (const Vec3f& v : ps.positions)
+        pts.push_back({v.x, v.y, v.z});
+    return referenceNeighbourCounts(pts, h);
+}
 } // namespace
 
 TEST(Classify, LatticeBlockOuterLayerIsSurfaceAndNothingElse)
@@ -55,17 +71,12 @@ TEST(Classify, NeighbourCountsMatchBruteForce)
     // Break the lattice: no pair at exactly h, where float and double may round differently.
     uint64_t seed = 7;
     for (Vec3f& v : ps.positions)
-        for (int a = 0; a < 3; ++a) {
-            seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-            v[a] += float((double(seed >> 11) / 9007199254740992.0 - 0.5) * 0.2 * sp.radius);
-        }
+        for (int a = 0; a < 3; ++a)
+            v[a] += float(uniform(seed) * 0.2 * sp.radius);
     const Params p = Params::fromRadius(sp.radius);
     neighbors::CellIndex index;
     const classify::Classification c = classifyScene(ps, p, index);
-    std::vector<std::array<double, 3>> pts;
-    for (const Vec3f& v : ps.positions)
-        pts.push_back({v.x, v.y, v.z});
-    const std::vector<int> expected = referenceNeighbourCounts(pts, p.smoothingLength);
+    const std::vector<int> expected = bruteForceCounts(ps, p.smoothingLength);
     for (size_t i = 0; i < index.size(); ++i)
         ASSERT_EQ(int(c.neighbours[i]), expected[index.order[i]]) << i;
     EXPECT_EQ(c.isolated, 4u) << "the drop scene's droplets";
@@ -82,26 +93,19 @@ TEST(Classify, NearCoincidentPileSharesExactSums)
     sp.count = 3000;
     ParticleSet ps = generateScene(Scene::Drop, sp);
     uint64_t seed = 11;
-    auto uniform = [&seed] {
-        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
-        return double(seed >> 11) / 9007199254740992.0 - 0.5;
-    };
     for (Vec3f& v : ps.positions)
         for (int a = 0; a < 3; ++a)
-            v[a] += float(uniform() * 0.2 * sp.radius);
+            v[a] += float(uniform(seed) * 0.2 * sp.radius);
     const uint32_t fluid = uint32_t(ps.size()), at = fluid / 2;
     const Vec3f spot = ps.positions[at];
     for (int k = 0; k < 2000; ++k)
-        ps.positions.push_back(Vec3f(spot.x + float(uniform() * 1e-6 * sp.radius),
-                                     spot.y + float(uniform() * 1e-6 * sp.radius),
-                                     spot.z + float(uniform() * 1e-6 * sp.radius)));
+        ps.positions.push_back(Vec3f(spot.x + float(uniform(seed) * 1e-6 * sp.radius),
+                                     spot.y + float(uniform(seed) * 1e-6 * sp.radius),
+                                     spot.z + float(uniform(seed) * 1e-6 * sp.radius)));
     const Params p = Params::fromRadius(sp.radius);
     neighbors::CellIndex index;
     const classify::Classification c = classifyScene(ps, p, index);
-    std::vector<std::array<double, 3>> pts;
-    for (const Vec3f& v : ps.positions)
-        pts.push_back({v.x, v.y, v.z});
-    const std::vector<int> expected = referenceNeighbourCounts(pts, p.smoothingLength);
+    const std::vector<int> expected = bruteForceCounts(ps, p.smoothingLength);
     size_t pile = 0;
     for (size_t i = 0; i < index.size(); ++i) {
         ASSERT_EQ(int(c.neighbours[i]), expected[index.order[i]]) << i;
