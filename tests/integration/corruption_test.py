@@ -216,6 +216,15 @@ for stem, name in (("vtu", "fluid_250_particles.vtu"), ("vtu64", "fluid_encoded_
         at = vtu.index(b"_", vtu.index(b"<AppendedData")) + 1 + 30
         add("vtu64_char.vtu", vtu[:at] + b"!" + vtu[at + 1:], "invalid character in base64")
         add("vtu64_pad.vtu", vtu[:at] + b"=" + vtu[at + 1:], "'=' inside a base64 quad")
+    if b"vtkZLibDataCompressor" in vtu and b'header_type="UInt64"' in vtu:
+        # a zlib bomb: 250M points, the first array's one block promising all 6 GB of them
+        at = vtu.index(b"_", vtu.index(b"<AppendedData")) + 1
+        n = 250000000
+        big = re.sub(rb'NumberOfPoints="\s*\d+"', b'NumberOfPoints="%d"' % n, vtu, 1)
+        at += len(big) - len(vtu)
+        blocks, size, last, csize = struct.unpack_from("<4Q", big, at)
+        add(stem + "_zlib_bomb.vtu", big[:at] + struct.pack("<4Q", 1, 24 * n, 24 * n, csize) + big[at + 32:],
+            "zlib block table promising 6 GB from 5 KB")
     if b"vtkZLibDataCompressor" in vtu:
         add(stem + "_compressor.vtu", replaced(vtu, b"vtkZLibDataCompressor", b"vtkLZ4DataCompressor"),
             "unsupported compressor")

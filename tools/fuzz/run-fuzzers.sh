@@ -24,8 +24,20 @@ trap 'rm -rf "$SEEDS"' EXIT
 for scene in ball slab drop; do
     $CLI generate $scene -n 300 -o "$SEEDS/$scene.bgeo" >/dev/null
     for ext in vdb ply xyz vtk bgeo.gz; do $CLI convert -q "$SEEDS/$scene.bgeo" "$SEEDS/$scene.$ext"; done
-    $CLI reconstruct -q "$SEEDS/$scene.bgeo" -r 0.05 -o "$SEEDS/$scene.obj" --vdb "$SEEDS/${scene}_ls.vdb"
-    $CLI mesh -q "$SEEDS/${scene}_ls.vdb" -o "$SEEDS/${scene}_mesh.ply"
+    $CLI reconstruct -q "$SEEDS/$scene.bgeo" -r 0.05 -o "$SEEDS/$scene.obj"
+done
+# Level sets under -max_len: a few particles moved off the origin, so the grid has one root child
+# (a level set straddling the origin has eight, each with 12 KB of masks).
+for n in 10 40; do
+    $CLI generate ball -n $n -o "$SEEDS/b$n.xyz" >/dev/null
+    /usr/bin/python3 -c "
+import struct, sys
+d = open(sys.argv[1], 'rb').read()
+v = struct.unpack('<%df' % (len(d) // 4), d)
+open(sys.argv[1], 'wb').write(struct.pack('<%df' % len(v), *[x + 1.0 for x in v]))" "$SEEDS/b$n.xyz"
+    $CLI rasterize -q "$SEEDS/b$n.xyz" -r 0.05 -o "$SEEDS/b${n}_ls.vdb"
+    $CLI mesh -q "$SEEDS/b${n}_ls.vdb" -o "$SEEDS/b${n}_mesh.ply"
+    rm "$SEEDS/b$n.xyz"
 done
 [ -d ../shared/data/real ] && cp ../shared/data/real/*.vtu ../shared/data/real/splishsplash_particle_grid_400_particles.bgeo \
     ../shared/data/real/cube_2366_particles.vtk "$SEEDS/" 2>/dev/null || true
