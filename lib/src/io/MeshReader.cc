@@ -146,26 +146,17 @@ TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path)
 TriangleMesh readMeshFromMemory(const uint8_t* data, size_t size, MeshFormat format,
                                 const std::string& source)
 {
-    if (size == 0 && (format == MeshFormat::Obj || format == MeshFormat::Ply))
-        throw InputError(source + ": file is empty");
-    switch (format) {
-    case MeshFormat::Obj:
-        return readObj(data, size, source);
-    case MeshFormat::Ply:
-        return readPly(data, size, source);
-    default:
+    if (format != MeshFormat::Obj && format != MeshFormat::Ply)
         throw InputError(source + ": cannot read this mesh type (readable: .obj .ply; .vtk "
                                   "meshes are written only)");
-    }
+    if (size == 0) throw InputError(source + ": file is empty");
+    return format == MeshFormat::Obj ? readObj(data, size, source) : readPly(data, size, source);
 }
 
 TriangleMesh readMesh(const std::string& path)
 {
-    const MeshFormat format = meshFormatFromPath(path);
-    if (format != MeshFormat::Obj && format != MeshFormat::Ply)
-        return readMeshFromMemory(nullptr, 0, format, path); // the error, before any read
     const std::vector<uint8_t> bytes = io_internal::readFile(path);
-    return readMeshFromMemory(bytes.data(), bytes.size(), format, path);
+    return readMeshFromMemory(bytes.data(), bytes.size(), meshFormatFromPath(path), path);
 }
 
 } // namespace io

@@ -14,8 +14,8 @@
 // The walk writes a normalised copy for OpenVDB: each kept grid right after its descriptor with
 // offsets that match, minus the delayed-load index (a second, unchecked table of chunk sizes
 // that only memory-mapped reading uses) and minus grids the walk cannot check (listed).
-// Point grids keep the older, shallower check (root counts): their leaves are attribute sets
-// with a format of their own, not walked here.
+// Point grids get their topology walked; their leaf buffers are attribute sets in a multi-pass
+// format of their own, not walked here (VdbPointsIO checks the leaves after the read).
 #include "io/VdbCheck.h"
 
 #include "io/ByteReader.h"
@@ -168,13 +168,19 @@ public:
     {
     }
 
-    /// Returns the offset where the leaf buffers start.
-    size_t run()
+    /// The topology (root, internal nodes, leaf masks); returns where the leaf buffers start.
+    size_t topology()
     {
         const int32_t buffers = mIn.read<int32_t>(false, "tree buffer count");
         if (buffers != 1) mIn.fail("corrupt tree buffer count " + std::to_string(buffers));
         root();
-        const size_t buffersStart = mIn.offset();
+        return mIn.offset();
+    }
+
+    /// The topology, then every leaf's buffer; returns where the leaf buffers start.
+    size_t run()
+    {
+        const size_t buffersStart = topology();
         for (const uint8_t* topologyMask : mLeafMasks) {
             const uint8_t* mask = mIn.take(64, "leaf value mask");
             if (std::memcmp(mask, topologyMask, 64) != 0)
@@ -296,19 +302,6 @@ private:
     std::vector<const uint8_t*> mLeafMasks;
 };
 
-/// A point grid's root counts (a corrupt count makes OpenVDB 10.0 loop for minutes).
-void checkPointRoot(ByteReader& in)
-{
-    const int32_t buffers = in.read<int32_t>(false, "tree buffer count");
-    if (buffers != 1) in.fail("corrupt tree buffer count " + std::to_string(buffers));
-    in.skip(4, "root background");
-    const uint64_t tiles = in.read<uint32_t>(false, "root tile count");
-    const uint64_t children = in.read<uint32_t>(false, "root child count");
-    if (tiles * 17 + children * (12 + 2 * 4096) > in.remaining())
-        in.fail("corrupt root node: " + std::to_string(tiles) + " tiles and " +
-                std::to_string(children) + " children do not fit in the grid");
-}
-
 struct GridWalk
 {
     std::vector<uint8_t> body; ///< the grid's bytes as OpenVDB gets them
@@ -338,7 +331,9 @@ GridWalk walkGrid(ByteReader& in, const std::string& treeType, bool half, bool i
     else if (valueLayout(treeType, layout))
         g.buffersStart = TreeWalk(in, compression, layout, half).run();
     else if (treeType == kPointTree) {
-        checkPointRoot(in);
+        // the same topology as a tree of 4-byte values; the leaves' attribute buffers, read
+        // in several passes, are not walked
+        TreeWalk(in, compression, ValueLayout{4, 1, false}, false).topology();
         if (!hasEnd)
             in.fail("a point grid in a file without grid offsets, not last (its end cannot be "
                     "found)");

@@ -26,6 +26,15 @@ double uniform(uint64_t& seed)
     return double(seed >> 11) / 9007199254740992.0 - 0.5;
 }
 
+/// Every coordinate moved by up to +-amount/2 (breaks a lattice: no pair at exactly h, where
+/// float and double may round differently).
+void jitter(ParticleSet& ps, uint64_t seed, double amount)
+{
+    for (Vec3f& v : ps.positions)
+        for (int a = 0; a < 3; ++a)
+            v[a] += float(uniform(seed) * amount);
+}
+
 /// Neighbours within h of each particle, in file order, by brute force.
 std::vector<int> bruteForceCounts(const ParticleSet& ps, double h)
 {
@@ -68,11 +77,7 @@ TEST(Classify, NeighbourCountsMatchBruteForce)
     sp.count = 3000;
     sp.droplets = 4;
     ParticleSet ps = generateScene(Scene::Drop, sp);
-    // Break the lattice: no pair at exactly h, where float and double may round differently.
-    uint64_t seed = 7;
-    for (Vec3f& v : ps.positions)
-        for (int a = 0; a < 3; ++a)
-            v[a] += float(uniform(seed) * 0.2 * sp.radius);
+    jitter(ps, 7, 0.2 * sp.radius);
     const Params p = Params::fromRadius(sp.radius);
     neighbors::CellIndex index;
     const classify::Classification c = classifyScene(ps, p, index);
@@ -92,10 +97,8 @@ TEST(Classify, NearCoincidentPileSharesExactSums)
     SceneParams sp;
     sp.count = 3000;
     ParticleSet ps = generateScene(Scene::Drop, sp);
-    uint64_t seed = 11;
-    for (Vec3f& v : ps.positions)
-        for (int a = 0; a < 3; ++a)
-            v[a] += float(uniform(seed) * 0.2 * sp.radius);
+    jitter(ps, 11, 0.2 * sp.radius);
+    uint64_t seed = 13;
     const uint32_t fluid = uint32_t(ps.size()), at = fluid / 2;
     const Vec3f spot = ps.positions[at];
     for (int k = 0; k < 2000; ++k)
