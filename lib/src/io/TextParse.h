@@ -71,7 +71,8 @@ inline void expectLineEnd(ByteReader& in, const char* what)
     while (p < in.size() && (d[p] == ' ' || d[p] == '\t' || d[p] == '\r'))
         ++p;
     if (p < in.size() && d[p] != '\n')
-        in.failAt(p, std::string("more values than properties on a line of ") + what);
+        in.failAt(p,
+                  std::string("a line of ") + what + " holds more or fewer values than properties");
     in.seek(p < in.size() ? p + 1 : p);
 }
 
