@@ -14,14 +14,13 @@
 // The walk writes a normalised copy for OpenVDB: each kept grid right after its descriptor with
 // offsets that match, minus the delayed-load index (a second, unchecked table of chunk sizes
 // that only memory-mapped reading uses) and minus grids the walk cannot check (listed).
-// Point grids get their topology walked; their leaf buffers are attribute sets in a multi-pass
-// format of their own, not walked here (VdbPointsIO checks the leaves after the read).
+// Point grids have the same topology; their leaf buffers, attribute sets in a multi-pass format
+// of their own, are walked by VdbPointBuffers.
 #include "io/VdbCheck.h"
 
 #include "io/ByteReader.h"
-
-#include <openvdb/Metadata.h>
-#include <openvdb/openvdb.h>
+#include "io/VdbCheckParts.h"
+#include "io/VdbPointBuffers.h"
 
 #include <array>
 #include <set>
@@ -41,6 +40,7 @@ enum : int8_t {
     kAllValues = 6
 };
 constexpr uint32_t kMinVersion = 222, kMaxVersion = 224; // node-mask compression .. multipass
+constexpr uint32_t kMultiPassVersion = 224;
 constexpr const char* kHalfSuffix = "_HalfFloat";
 constexpr const char* kPointTree = "Tree_ptdataidx32_5_4_3";
 
@@ -60,14 +60,6 @@ void appendString(std::vector<uint8_t>& out, const std::string& s)
     append(out, reinterpret_cast<const uint8_t*>(s.data()), s.size());
 }
 
-std::string readString(ByteReader& in, const char* what)
-{
-    const int32_t len = in.read<int32_t>(false, what);
-    if (len < 0) in.fail(std::string("negative length of ") + what);
-    const uint8_t* p = in.take(size_t(len), what);
-    return std::string(reinterpret_cast<const char*>(p), size_t(len));
-}
-
 size_t countOn(const uint8_t* mask, size_t bits)
 {
     size_t n = 0;
@@ -76,48 +68,11 @@ size_t countOn(const uint8_t* mask, size_t bits)
     return n;
 }
 
-/// A MetaMap (count, then name, type name and value, each length-prefixed) copied without the
-/// entries OpenVDB drops or only uses for delayed loading (types starting with "__"). A value of
-/// a registered fixed-size type must have that size: OpenVDB reads sizeof(T) whatever the
-/// length says, and would then read the rest of the grid from the wrong place.
-void copyMetaMap(ByteReader& in, std::vector<uint8_t>& out, const char* what)
-{
-    const int32_t count = in.read<int32_t>(false, what);
-    if (count < 0 || size_t(count) > in.remaining() / 12)
-        in.fail(std::string("corrupt ") + what + " " + std::to_string(count));
-    std::vector<uint8_t> kept;
-    int32_t keptCount = 0;
-    for (int32_t m = 0; m < count; ++m) {
-        const size_t start = in.offset();
-        const std::string name = readString(in, "metadata name");
-        if (name.empty()) in.fail("empty metadata name");
-        const std::string type = readString(in, "metadata type");
-        const int32_t len = in.read<int32_t>(false, "metadata value size");
-        if (len < 0) in.fail("negative size of metadata '" + name.substr(0, 40) + "'");
-        const uint8_t* value = in.take(size_t(len), "metadata value");
-        if (type.compare(0, 2, "__") == 0) continue;
-        if (type != openvdb::StringMetadata::staticTypeName() &&
-            openvdb::Metadata::isRegisteredType(type)) {
-            const size_t expected = openvdb::Metadata::createMetadata(type)->size();
-            if (size_t(len) != expected)
-                in.fail("corrupt metadata '" + name.substr(0, 40) + "': a " + type + " of " +
-                        std::to_string(len) + " bytes (" + std::to_string(expected) + " expected)");
-            if (type == openvdb::BoolMetadata::staticTypeName() && value[0] > 1)
-                in.fail("corrupt metadata '" + name.substr(0, 40) + "': bool value " +
-                        std::to_string(value[0]));
-        }
-        append(kept, in.data() + start, in.offset() - start);
-        ++keptCount;
-    }
-    appendValue(out, keptCount);
-    append(out, kept.data(), kept.size());
-}
-
 /// The transform: a map type name, then that map's fixed-size fields (their read() in
 /// openvdb/math/Maps.h). False for another kind of map (frustum), whose size is not known here.
 bool skipTransform(ByteReader& in, std::string& map)
 {
-    map = readString(in, "transform type");
+    map = readVdbString(in, "transform type");
     if (map.size() < 4 || map.size() > 64 || map.compare(map.size() - 3, 3, "Map") != 0)
         in.fail("corrupt transform type '" + map.substr(0, 40) + "'");
     static const std::pair<const char*, size_t> kMapBytes[] = {
@@ -176,6 +131,9 @@ public:
         root();
         return mIn.offset();
     }
+
+    /// Each leaf's value mask in the topology, in file order (after topology()).
+    const std::vector<const uint8_t*>& leafMasks() const { return mLeafMasks; }
 
     /// The topology, then every leaf's buffer; returns where the leaf buffers start.
     size_t run()
@@ -285,14 +243,7 @@ private:
             mIn.fail(std::string("corrupt ") + what + ": a chunk of " + std::to_string(chunk) +
                      " bytes, " + std::to_string(mIn.remaining()) + " left in the grid");
         const uint8_t* data = mIn.take(size_t(chunk), what);
-        if (mCompression & kBlosc) {
-            // blosc trusts its own header: its sizes must be this chunk's
-            if (chunk < 16 || loadAs<uint32_t>(data + 4, false) != bytes ||
-                loadAs<uint32_t>(data + 12, false) != uint64_t(chunk))
-                mIn.fail(std::string("corrupt ") + what + ": blosc header does not match " +
-                         "the chunk (" + std::to_string(chunk) + " bytes holding " +
-                         std::to_string(bytes) + ")");
-        }
+        if (mCompression & kBlosc) checkBloscChunk(mIn, data, uint64_t(chunk), bytes, false, what);
     }
 
     ByteReader& mIn;
@@ -312,8 +263,8 @@ struct GridWalk
 /// One grid's bytes from in's position to its end: where the walk ends, or for a grid that is
 /// not walked, the reader's bound when that is the grid's end (hasEnd: the file has grid
 /// offsets, or this is its last grid).
-GridWalk walkGrid(ByteReader& in, const std::string& treeType, bool half, bool instance,
-                  bool hasEnd)
+GridWalk walkGrid(ByteReader& in, uint32_t version, const std::string& treeType, bool half,
+                  bool instance, bool hasEnd)
 {
     GridWalk g;
     const uint32_t compression = in.read<uint32_t>(false, "grid compression flags");
@@ -331,13 +282,13 @@ GridWalk walkGrid(ByteReader& in, const std::string& treeType, bool half, bool i
     else if (valueLayout(treeType, layout))
         g.buffersStart = TreeWalk(in, compression, layout, half).run();
     else if (treeType == kPointTree) {
-        // the same topology as a tree of 4-byte values; the leaves' attribute buffers, read
-        // in several passes, are not walked
-        TreeWalk(in, compression, ValueLayout{4, 1, false}, false).topology();
-        if (!hasEnd)
-            in.fail("a point grid in a file without grid offsets, not last (its end cannot be "
-                    "found)");
-        in.seek(in.size());
+        // the same topology as a tree of 4-byte values; then leaf buffers of their own
+        if (version < kMultiPassVersion)
+            in.fail("a point grid in a file of version " + std::to_string(version) +
+                    " (point grids came with version " + std::to_string(kMultiPassVersion) + ")");
+        TreeWalk tree(in, compression, ValueLayout{4, 1, false}, false);
+        g.buffersStart = tree.topology();
+        walkPointBuffers(in, tree.leafMasks());
     } else
         g.skipReason = "a grid type fluidsurf does not read";
     if (!g.skipReason.empty()) {
@@ -383,9 +334,9 @@ CheckedVdb checkVdb(const uint8_t* data, size_t size, const std::string& src)
     int32_t kept = 0;
     std::set<std::string> keptNames;
     for (int32_t g = 0; g < grids; ++g) {
-        const std::string name = readString(in, "grid name");
-        const std::string typeName = readString(in, "grid type");
-        const std::string parent = readString(in, "grid instance parent");
+        const std::string name = readVdbString(in, "grid name");
+        const std::string typeName = readVdbString(in, "grid type");
+        const std::string parent = readVdbString(in, "grid instance parent");
         const size_t descriptorEnd = in.offset() + 24;
         const int64_t gridPos = in.read<int64_t>(false, "grid offset");
         const int64_t blockPos = in.read<int64_t>(false, "grid block offset");
@@ -410,7 +361,8 @@ CheckedVdb checkVdb(const uint8_t* data, size_t size, const std::string& src)
         grid.seek(descriptorEnd);
         GridWalk walk;
         try {
-            walk = walkGrid(grid, treeType, half, !parent.empty(), hasOffsets || g + 1 == grids);
+            walk = walkGrid(grid, version, treeType, half, !parent.empty(),
+                            hasOffsets || g + 1 == grids);
         } catch (const InputError& e) {
             throw InputError(std::string(e.what()) + " in " + label);
         }

@@ -3,51 +3,21 @@
 // corruption and every cut of a level set either reads or is one InputError, never a crash.
 #include "io/VdbCheck.h"
 #include "io/VdbGrids.h"
+#include "unit/io/VdbTestFiles.h"
 
 #include <fluidsurf/Error.h>
 
-#include <openvdb/io/Stream.h>
 #include <openvdb/tools/LevelSetSphere.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdio>
-#include <fstream>
-#include <sstream>
 
 namespace fluidsurf {
 namespace {
 
-using Bytes = std::vector<uint8_t>;
-
-Bytes toBytes(const std::string& s)
-{
-    return Bytes(s.begin(), s.end());
-}
-
-/// grids written by OpenVDB itself: through io::Stream (no grid offsets) or io::File
-/// (offsets, as every .vdb on disk), with the given compression.
-Bytes writeVdb(const openvdb::GridPtrVec& grids, uint32_t compression, bool file)
-{
-    if (!file) {
-        std::ostringstream os(std::ios::binary);
-        openvdb::io::Stream s(os);
-        s.setCompression(compression);
-        s.write(grids);
-        return toBytes(os.str());
-    }
-    const std::string path = ::testing::TempDir() + "/fluidsurf_vdbcheck.vdb";
-    openvdb::io::File f(path);
-    f.setCompression(compression);
-    f.write(grids);
-    f.close();
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream all;
-    all << in.rdbuf();
-    std::remove(path.c_str());
-    return toBytes(all.str());
-}
+using test::Bytes;
+using test::writeVdb;
 
 openvdb::FloatGrid::Ptr sphere()
 {

@@ -1,0 +1,50 @@
+// VdbTestFiles.h - .vdb bytes written by OpenVDB itself, for the tests of the walk every .vdb
+// goes through before OpenVDB reads it (VdbCheckTest, VdbPointBuffersTest).
+#pragma once
+
+#include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+namespace test {
+
+using Bytes = std::vector<uint8_t>;
+
+inline Bytes toBytes(const std::string& s)
+{
+    return Bytes(s.begin(), s.end());
+}
+
+/// grids written through io::Stream (no grid offsets) or io::File (offsets, as every .vdb on
+/// disk), with the given compression.
+inline Bytes writeVdb(const openvdb::GridPtrVec& grids, uint32_t compression, bool file)
+{
+    if (!file) {
+        std::ostringstream os(std::ios::binary);
+        openvdb::io::Stream s(os);
+        s.setCompression(compression);
+        s.write(grids);
+        return toBytes(os.str());
+    }
+    const std::string path = ::testing::TempDir() + "/fluidsurf_vdbcheck.vdb";
+    openvdb::io::File f(path);
+    f.setCompression(compression);
+    f.write(grids);
+    f.close();
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream all;
+    all << in.rdbuf();
+    std::remove(path.c_str());
+    return toBytes(all.str());
+}
+
+} // namespace test
+} // namespace fluidsurf
