@@ -69,15 +69,15 @@ with open(S("ascii.ply"), "w") as f:
             "property float z\nend_header\n" % len(points) + "".join("%r %r %r\n" % p for p in points))
 
 # --- broken files --------------------------------------------------------------------------
-cases = []  # (file name, what is broken, commands)
+cases = []  # (file name, what is broken, commands[, what the message must say])
 PARTICLE = ("info", "convert", "rasterize", "reconstruct")
 LEVELSET = ("info", "mesh")
 
 
-def add(name, data, why, commands=PARTICLE):
+def add(name, data, why, commands=PARTICLE, expect=None):
     with open(os.path.join(bad_dir, name), "wb") as f:
         f.write(data)
-    cases.append((name, why, commands))
+    cases.append((name, why, commands, expect))
 
 
 def cuts(stem, ext, data, fractions, commands=PARTICLE, floor=0):
@@ -238,16 +238,74 @@ add("vdbp_gridcount.vdb", replaced(vdb, struct.pack("<i", 1) + struct.pack("<i",
                                    struct.pack("<i", 0x7FFFFFFF) + struct.pack("<i", len(b"points")) + b"points"),
     "absurd grid count")
 
+
+def vdb_descriptor(data, name):
+    """The offsets (grid, block, end) of the grid called name, and where they are."""
+    at = data.index(struct.pack("<i", len(name)) + name) + 4 + len(name)
+    for _ in range(2):  # grid type, instance parent
+        at += 4 + struct.unpack_from("<i", data, at)[0]
+    return at, struct.unpack_from("<3q", data, at)
+
+
+# the leaf buffers of a point grid (io/VdbPointBuffers.cc): a pass count, a voxel chunk size per
+# leaf, a header byte and the attribute descriptor, each leaf's array metadata, then each
+# attribute's page headers
+_, (_, pblock, _) = vdb_descriptor(vdb, b"points")
+leaves = int(re.search(r"in (\d+) leaves", subprocess.run(
+    [BIN, "info", "--no-spacing", S("frame.vdb")], capture_output=True, text=True).stdout).group(1))
+pvdb = lambda at, b: vdb[:at] + b + vdb[at + len(b):]
+header = pblock + 2 + 2 * leaves
+at = header + 1
+count = struct.unpack_from("<Q", vdb, at)[0]
+at += 8
+
+
+def vdb_string(at):
+    return at + 4 + struct.unpack_from("<i", vdb, at)[0]
+
+
+for _ in range(2 * count):  # type pairs
+    at = vdb_string(at)
+name_at = at + 4  # the first attribute name's first byte
+for _ in range(count):  # names and positions
+    at = vdb_string(at) + 8
+groups = struct.unpack_from("<Q", vdb, at)[0]
+at += 8
+for _ in range(groups):
+    at = vdb_string(at) + 8
+metadata = struct.unpack_from("<i", vdb, at)[0]
+at += 4
+for _ in range(metadata):
+    at = vdb_string(vdb_string(at))
+    at += 4 + struct.unpack_from("<i", vdb, at)[0]
+for _ in range(leaves * count):  # array metadata: byte count, flags, serialization flags, size
+    at += 8 + 1 + 1 + 4 + (4 if vdb[at + 9] & 1 else 0)
+page = at  # attribute 0, leaf 0: a page header (its arrays are blosc-paged)
+stored = struct.unpack_from("<i", vdb, page)[0]
+add("vdbp_passes.vdb", pvdb(pblock, struct.pack("<H", 2)), "point grid pass count 2", expect="pass count 2")
+add("vdbp_leafheader.vdb", pvdb(header, b"\x07"), "unknown point leaf header", expect="point leaf header 7")
+add("vdbp_attrcount.vdb", pvdb(header + 1, struct.pack("<Q", 1 << 40)), "absurd attribute count",
+    expect="promises 1099511627776 attributes")
+add("vdbp_attrname.vdb", pvdb(name_at, b"\n"), "attribute name with a newline (the message stays one line)",
+    expect="corrupt attribute name '?")
+add("vdbp_pagezero.vdb", pvdb(page, struct.pack("<i", 0)), "attribute page of size 0",
+    expect="corrupt attribute page: 0 bytes stored")
+if stored > 0:  # blosc: stored size, content size
+    content = struct.unpack_from("<i", vdb, page + 4)[0]
+    add("vdbp_pageshort.vdb", pvdb(page + 4, struct.pack("<i", content - 2)), "page shorter than its arrays",
+        expect="runs past its page")
+    add("vdbp_pagebomb.vdb", pvdb(page + 4, struct.pack("<i", 1 << 30)), "page promising 1 GiB",
+        expect="bytes stored for 1073741824")
+else:
+    add("vdbp_pageshort.vdb", pvdb(page, struct.pack("<i", stored + 2)), "page shorter than its arrays",
+        expect="runs past its page")
+
 # VDB level sets, through info and mesh
 ls = read(S("surface.vdb"))
 cuts("ls", "vdb", ls, (0.01, 0.1, 0.3, 0.5, 0.7, 0.9, 0.999), LEVELSET, floor=8)
 add("ls_magic.vdb", b"\x21" + ls[1:], "damaged magic", LEVELSET)
 add("ls_version.vdb", ls[:8] + struct.pack("<I", 300) + ls[12:], "version from the future", LEVELSET)
-name_at = ls.index(b"surface") - 4  # the descriptor: name, type, parent, three offsets
-desc = name_at + 4 + 7
-desc += 4 + struct.unpack_from("<i", ls, desc)[0]  # grid type
-desc += 4 + struct.unpack_from("<i", ls, desc)[0]  # instance parent
-grid_pos, block_pos, end_pos = struct.unpack_from("<3q", ls, desc)
+desc, (grid_pos, block_pos, end_pos) = vdb_descriptor(ls, b"surface")
 patch = lambda at, b: ls[:at] + b + ls[at + len(b):]
 add("ls_endpos.vdb", patch(desc + 16, struct.pack("<q", end_pos - 1000)), "grid end offset wrong", LEVELSET)
 add("ls_endpos_far.vdb", patch(desc + 16, struct.pack("<q", 1 << 40)), "grid end offset past the file", LEVELSET)
@@ -320,7 +378,7 @@ def measured(args):
 
 
 failures, runs, slowest, biggest = [], 0, (0, ""), (0, "")
-for name, why, commands in cases:
+for name, why, commands, *expect in cases:
     path = os.path.join(bad_dir, name)
     for cmd in commands:
         args, output = command(cmd, path)
@@ -338,6 +396,8 @@ for name, why, commands in cases:
             problems.append("exit %d" % code)
         if len(lines) != 1 or not lines[0].startswith("fluidsurf: error: ") or name not in lines[0]:
             problems.append("stderr %r" % lines[:3])
+        elif expect and expect[0] and expect[0] not in lines[0]:
+            problems.append("message %r lacks %r" % (lines[0], expect[0]))
         if stdout:
             problems.append("stdout %r" % stdout[:120])
         left = sorted(set(os.listdir(out_dir)) - {"out.xyz", "out.vdb", "out.obj"})

@@ -7,6 +7,37 @@
 #include <fluidsurf/Version.h>
 
 #include <iostream>
+#include <string>
+
+namespace {
+
+/// The message as one line of UTF-8 text: names read from a corrupt file can hold newlines,
+/// terminal escapes or bytes that are not text. Anything else becomes '?'.
+std::string oneLine(const std::string& s)
+{
+    std::string out;
+    for (size_t i = 0; i < s.size();) {
+        const unsigned char c = static_cast<unsigned char>(s[i]);
+        const size_t len = c < 0x80           ? 1
+                           : (c >> 5) == 0x6  ? 2
+                           : (c >> 4) == 0xE  ? 3
+                           : (c >> 3) == 0x1E ? 4
+                                              : 0;
+        bool ok = len > 0 && i + len <= s.size() && !(len == 1 && (c < 0x20 || c == 0x7f));
+        for (size_t k = 1; ok && k < len; ++k)
+            ok = (static_cast<unsigned char>(s[i + k]) & 0xC0) == 0x80;
+        if (ok) {
+            out.append(s, i, len);
+            i += len;
+        } else {
+            out += '?';
+            ++i;
+        }
+    }
+    return out;
+}
+
+} // namespace
 
 int main(int argc, char** argv)
 {
@@ -42,7 +73,7 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        std::cerr << "fluidsurf: error: " << e.what() << " (see 'fluidsurf --help')\n";
+        std::cerr << "fluidsurf: error: " << oneLine(e.what()) << " (see 'fluidsurf --help')\n";
         return e.get_exit_code() ? e.get_exit_code() : 2;
     }
     cli::installInterruptHandler();
@@ -58,13 +89,13 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
         std::cerr << "fluidsurf: interrupted; no partial output was written\n";
         return cli::interruptExitCode();
     } catch (const fluidsurf::Error& e) {
-        std::cerr << "fluidsurf: error: " << e.what() << "\n";
+        std::cerr << "fluidsurf: error: " << oneLine(e.what()) << "\n";
         return 1;
     } catch (const std::bad_alloc&) {
         std::cerr << "fluidsurf: error: out of memory\n";
         return 1;
     } catch (const std::exception& e) {
-        std::cerr << "fluidsurf: error: " << e.what() << "\n";
+        std::cerr << "fluidsurf: error: " << oneLine(e.what()) << "\n";
         return 1;
     }
     return 2;

@@ -117,9 +117,12 @@ bool valueLayout(const std::string& treeType, ValueLayout& v)
 class TreeWalk
 {
 public:
-    TreeWalk(ByteReader& in, uint32_t compression, const ValueLayout& v, bool half)
+    /// decode: blosc chunks are decoded as well as checked (see decodeBloscChunk)
+    TreeWalk(ByteReader& in, uint32_t compression, const ValueLayout& v, bool half,
+             bool decode = false)
         : mIn(in), mCompression(compression), mFullBytes(v.fullBytes),
-          mArrayBytes(half && v.real ? 2 * v.components : v.fullBytes), mHalf(half && v.real)
+          mArrayBytes(half && v.real ? 2 * v.components : v.fullBytes), mHalf(half && v.real),
+          mDecode(decode)
     {
     }
 
@@ -243,14 +246,18 @@ private:
             mIn.fail(std::string("corrupt ") + what + ": a chunk of " + std::to_string(chunk) +
                      " bytes, " + std::to_string(mIn.remaining()) + " left in the grid");
         const uint8_t* data = mIn.take(size_t(chunk), what);
-        if (mCompression & kBlosc) checkBloscChunk(mIn, data, uint64_t(chunk), bytes, false, what);
+        if (mCompression & kBlosc) {
+            checkBloscChunk(mIn, data, uint64_t(chunk), bytes, false, what);
+            if (mDecode) decodeBloscChunk(mIn, data, mScratch, what);
+        }
     }
 
     ByteReader& mIn;
     const uint32_t mCompression;
     const size_t mFullBytes, mArrayBytes;
-    const bool mHalf;
+    const bool mHalf, mDecode;
     std::vector<const uint8_t*> mLeafMasks;
+    std::vector<uint8_t> mScratch;
 };
 
 struct GridWalk
@@ -271,7 +278,7 @@ GridWalk walkGrid(ByteReader& in, uint32_t version, const std::string& treeType,
     if (compression & ~(kZip | kActiveMask | kBlosc))
         in.fail("corrupt grid compression flags " + std::to_string(compression));
     appendValue(g.body, compression);
-    copyMetaMap(in, g.body, "grid metadata count");
+    copyMetaMap(in, g.body, "grid metadata count", /*grid=*/true);
     const size_t rest = in.offset();
     std::string map;
     ValueLayout layout;
@@ -286,7 +293,7 @@ GridWalk walkGrid(ByteReader& in, uint32_t version, const std::string& treeType,
         if (version < kMultiPassVersion)
             in.fail("a point grid in a file of version " + std::to_string(version) +
                     " (point grids came with version " + std::to_string(kMultiPassVersion) + ")");
-        TreeWalk tree(in, compression, ValueLayout{4, 1, false}, false);
+        TreeWalk tree(in, compression, ValueLayout{4, 1, false}, false, /*decode=*/true);
         g.buffersStart = tree.topology();
         walkPointBuffers(in, tree.leafMasks());
     } else

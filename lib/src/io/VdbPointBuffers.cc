@@ -14,7 +14,8 @@
 //                arrays not written in pages, the array itself (a flag byte, raw or blosc)
 // OpenVDB trusts all of it: an array longer than its page trips an assertion (an abort), a page
 // size of zero another, sizes that disagree read past buffers or free them twice. So each count,
-// size and range is checked here against the others and the file before OpenVDB decodes them.
+// size and range is checked here against the others and the file, and each blosc chunk decoded
+// once, before OpenVDB reads any of it: it must not throw half-way through its passes either.
 #include "io/VdbPointBuffers.h"
 
 #include "io/VdbCheckParts.h"
@@ -258,6 +259,7 @@ private:
         }
         const uint8_t* chunk = mIn.take(bytes, "voxel offsets");
         checkBloscChunk(mIn, chunk, bytes, kVoxelOffsetBytes, false, "voxel offsets");
+        decodeBloscChunk(mIn, chunk, mScratch, "voxel offsets");
     }
 
     /// Passes A+3..2A+2: attribute a's bytes, leaf after leaf: a page where an array starts
@@ -277,6 +279,11 @@ private:
                 }
                 const uint8_t* chunk = mIn.take(size_t(p.stored), "attribute page");
                 checkBloscChunk(mIn, chunk, uint64_t(p.stored), p.content, true, "attribute page");
+                // Page::decompress gives blosc twice the page's size, which must leave it 16
+                if (loadAs<uint32_t>(chunk + 4, false) < 16)
+                    mIn.fail("corrupt attribute page: blosc data of " + std::to_string(p.content) +
+                             " bytes");
+                decodeBloscChunk(mIn, chunk, mScratch, "attribute page");
                 continue;
             }
             const uint8_t compressed = array.uniform ? 0 : *mIn.take(1, "attribute array flag");
@@ -291,6 +298,7 @@ private:
                     mIn.fail("corrupt attribute array: " + std::to_string(array.bytes) +
                              " compressed bytes for " + std::to_string(array.expected));
                 checkBloscChunk(mIn, bytes, array.bytes, array.expected, true, "attribute array");
+                decodeBloscChunk(mIn, bytes, mScratch, "attribute array");
             }
         }
     }
@@ -301,6 +309,7 @@ private:
     size_t mAttributes = 0;
     std::deque<std::vector<uint32_t>> mDescriptors; // stable addresses for the shared one
     std::map<openvdb::NamePair, uint32_t> mStorage;
+    std::vector<uint8_t> mScratch; // blosc chunks decoded to be sure they decode
 };
 
 } // namespace

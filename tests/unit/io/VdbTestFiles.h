@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -34,7 +36,9 @@ inline Bytes writeVdb(const openvdb::GridPtrVec& grids, uint32_t compression, bo
         s.write(grids);
         return toBytes(os.str());
     }
-    const std::string path = ::testing::TempDir() + "/fluidsurf_vdbcheck.vdb";
+    // one name per process: ctest runs the tests of this file in parallel processes
+    const std::string path =
+        ::testing::TempDir() + "/fluidsurf_vdbcheck_" + std::to_string(::getpid()) + ".vdb";
     openvdb::io::File f(path);
     f.setCompression(compression);
     f.write(grids);
