@@ -1,6 +1,7 @@
 // ReadBench.cc - `fluidsurf_bench io`: writes one generated frame (the drop scene, ids and
 // velocities stripped to positions only so every format carries the same bytes of payload) in
-// each writable format, then reads each file `repeat` times through the public API. The file
+// each writable format, then reads each file `repeat` times through the public API (the points
+// .vdb and a level set also through OpenVDB's own reader, in the same run). The file
 // is in the page cache (one untimed warm-up read), so this measures parsing and copying, not
 // the disk.
 #include "Bench.h"
@@ -11,6 +12,7 @@
 #include <fluidsurf/io/ParticleIO.h>
 
 #include <openvdb/io/File.h>
+#include <openvdb/points/PointDataGrid.h>
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -72,6 +74,35 @@ void timeLevelSetReads(const ParticleSet& ps, double radius, const std::string& 
     rows.push_back(ours), rows.push_back(theirs);
     ::unlink(path.c_str());
 }
+/// OpenVDB's own io::File reader doing what io::readParticles does with a points .vdb: every
+/// leaf's positions decoded and turned into world space; the baseline of the row before it.
+Row timeOpenVdbPointRead(const std::string& path, int repeat)
+{
+    Row row{"VDB points: OpenVDB io::File + world positions", path};
+    std::vector<double> t;
+    for (int k = 0; k <= repeat; ++k) { // the first read is an untimed warm-up
+        std::vector<openvdb::Vec3f> positions;
+        const double s = seconds([&] {
+            openvdb::io::File f(path);
+            f.open();
+            auto grid = openvdb::gridPtrCast<openvdb::points::PointDataGrid>((*f.getGrids())[0]);
+            const openvdb::math::Transform& xform = grid->transform();
+            for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
+                openvdb::points::AttributeHandle<openvdb::Vec3f> h(leaf->constAttributeArray("P"));
+                for (auto idx = leaf->beginIndexAll(); idx; ++idx)
+                    positions.push_back(openvdb::Vec3f(xform.indexToWorld(
+                        idx.getCoord().asVec3d() + openvdb::Vec3d(h.get(*idx)))));
+            }
+            f.close();
+        });
+        if (k > 0) t.push_back(s);
+        row.particles = positions.size();
+    }
+    struct stat st;
+    if (::stat(path.c_str(), &st) == 0) row.bytes = double(st.st_size);
+    row.secs = median(t);
+    return row;
+}
 } // namespace
 
 int runReadBench(const ReadBenchOptions& o)
@@ -95,6 +126,7 @@ int runReadBench(const ReadBenchOptions& o)
         const std::string path = base + c.ext;
         io::writeParticles(ps, path);
         rows.push_back(timeRead(c.name, path, o.repeat));
+        if (std::string(c.ext) == ".vdb") rows.push_back(timeOpenVdbPointRead(path, o.repeat));
         ::unlink(path.c_str());
     }
     timeLevelSetReads(ps, sp.radius, base, o.repeat, rows);

@@ -1,6 +1,11 @@
 // VdbTestFiles.h - .vdb bytes written by OpenVDB itself, for the tests of the walk every .vdb
-// goes through before OpenVDB reads it (VdbCheckTest, VdbPointBuffersTest).
+// goes through before OpenVDB reads it (VdbCheckTest, VdbPointBuffersTest), and a reader of
+// corrupted copies.
 #pragma once
+
+#include "io/VdbGrids.h"
+
+#include <fluidsurf/Error.h>
 
 #include <openvdb/io/File.h>
 #include <openvdb/io/Stream.h>
@@ -49,6 +54,25 @@ inline Bytes writeVdb(const openvdb::GridPtrVec& grids, uint32_t compression, bo
     std::remove(path.c_str());
     return toBytes(all.str());
 }
+
+/// Reads .vdb bytes as the file c.vdb through the walk and OpenVDB, counting reads and
+/// refusals; a refusal must be one InputError naming the file. An abort or a crash ends the
+/// test binary; ASan builds (tools/fuzz) also catch reads out of bounds that do not crash.
+struct ReadOrRefuse
+{
+    size_t read = 0, refused = 0;
+
+    void operator()(const Bytes& b)
+    {
+        try {
+            io_internal::readVdbGrids(b.data(), b.size(), "c.vdb");
+            ++read;
+        } catch (const InputError& e) {
+            EXPECT_EQ(std::string(e.what()).rfind("c.vdb: ", 0), 0u) << e.what();
+            ++refused;
+        }
+    }
+};
 
 } // namespace test
 } // namespace fluidsurf
