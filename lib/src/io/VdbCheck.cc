@@ -23,6 +23,7 @@
 #include "io/VdbPointBuffers.h"
 
 #include <array>
+#include <cctype>
 #include <set>
 
 namespace fluidsurf {
@@ -117,7 +118,7 @@ bool valueLayout(const std::string& treeType, ValueLayout& v)
 class TreeWalk
 {
 public:
-    /// decode: blosc chunks are decoded as well as checked (see decodeBloscChunk)
+    /// decode: compressed chunks are decoded as well as checked (see decodeBloscChunk)
     TreeWalk(ByteReader& in, uint32_t compression, const ValueLayout& v, bool half,
              bool decode = false)
         : mIn(in), mCompression(compression), mFullBytes(v.fullBytes),
@@ -249,7 +250,8 @@ private:
         if (mCompression & kBlosc) {
             checkBloscChunk(mIn, data, uint64_t(chunk), bytes, false, what);
             if (mDecode) decodeBloscChunk(mIn, data, mScratch, what);
-        }
+        } else if (mDecode)
+            decodeZipChunk(mIn, data, uint64_t(chunk), bytes, mScratch, what);
     }
 
     ByteReader& mIn;
@@ -327,11 +329,19 @@ CheckedVdb checkVdb(const uint8_t* data, size_t size, const std::string& src)
     const uint8_t offsetsFlag = *in.take(1, "grid offsets flag");
     if (offsetsFlag > 1) in.fail("corrupt grid offsets flag");
     const bool hasOffsets = offsetsFlag == 1;
-    in.skip(36, "UUID");
+    const uint8_t* uuid = in.take(36, "UUID");
     CheckedVdb r;
     std::vector<uint8_t>& out = r.bytes;
     out.reserve(size);
     append(out, data, in.offset());
+    // OpenVDB parses the UUID (a tag for caching, not data) and fails on a damaged one with a
+    // stream error that reads like a truncated file; the copy gets a blank one instead
+    bool uuidOk = true;
+    for (size_t i = 0; i < 36; ++i)
+        uuidOk &= (i == 8 || i == 13 || i == 18 || i == 23) ? uuid[i] == '-'
+                                                            : std::isxdigit(uuid[i]) != 0;
+    if (!uuidOk)
+        std::memcpy(out.data() + (uuid - data), "00000000-0000-0000-0000-000000000000", 36);
     copyMetaMap(in, out, "file metadata count");
     const int32_t grids = in.read<int32_t>(false, "grid count");
     if (grids < 0 || size_t(grids) > in.remaining() / 36)

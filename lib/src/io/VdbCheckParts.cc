@@ -5,6 +5,7 @@
 #include <openvdb/openvdb.h>
 
 #include <blosc.h>
+#include <zlib.h>
 
 #include <set>
 
@@ -104,6 +105,17 @@ void decodeBloscChunk(ByteReader& in, const uint8_t* chunk, std::vector<uint8_t>
                 (got < 0 ? "blosc error " + std::to_string(got)
                          : std::to_string(got) + " of " + std::to_string(nbytes) + " bytes") +
                 ")");
+}
+
+void decodeZipChunk(ByteReader& in, const uint8_t* chunk, uint64_t chunkBytes, uint64_t bytes,
+                    std::vector<uint8_t>& scratch, const std::string& what)
+{
+    scratch.resize(bytes + 1); // one byte more: a longer stream shows as more than bytes
+    uLongf got = uLongf(scratch.size());
+    const int status = uncompress(scratch.data(), &got, chunk, uLong(chunkBytes));
+    if (status != Z_OK || got != bytes)
+        in.fail("corrupt " + what + ": its zip data does not inflate to " + std::to_string(bytes) +
+                " bytes");
 }
 
 } // namespace io_internal

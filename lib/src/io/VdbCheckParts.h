@@ -35,5 +35,10 @@ void checkBloscChunk(ByteReader& in, const uint8_t* chunk, uint64_t chunkBytes, 
 void decodeBloscChunk(ByteReader& in, const uint8_t* chunk, std::vector<uint8_t>& scratch,
                       const std::string& what);
 
+/// The same for a zip chunk of chunkBytes that must inflate to exactly bytes (the topology of a
+/// point grid written with zip compression).
+void decodeZipChunk(ByteReader& in, const uint8_t* chunk, uint64_t chunkBytes, uint64_t bytes,
+                    std::vector<uint8_t>& scratch, const std::string& what);
+
 } // namespace io_internal
 } // namespace fluidsurf
