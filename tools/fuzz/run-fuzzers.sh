@@ -13,7 +13,7 @@ command -v clang++ >/dev/null || { echo "run-fuzzers: needs clang (apt-get insta
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFLUIDSURF_FUZZ=ON \
     -DFLUIDSURF_WITH_CUDA=OFF -DFLUIDSURF_BUILD_TESTS=OFF >/dev/null
 cmake --build build-fuzz -j "$(nproc)" >/dev/null
-bash tools/scripts/build.sh build >/dev/null # the release CLI: seeds, and replaying findings
+bash tools/scripts/build.sh build >/dev/null # the release CLI makes the seeds
 CLI=$PWD/build/fluidsurf
 F=build-fuzz/fuzz
 mkdir -p $F/findings
