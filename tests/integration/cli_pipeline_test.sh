@@ -61,7 +61,8 @@ assert root["name"] == "total" and root["seconds"] > 0
 top = sum(c["seconds"] for c in root["children"])
 assert abs(top - root["seconds"]) <= 0.05 * root["seconds"], (top, root["seconds"])
 names = [c["name"] for c in root["children"]]
-assert names == ["read", "rasterize", "mesh", "write vdb", "write mesh", "check"], names
+assert names == ["read", "rasterize", "mesh", "post", "write vdb", "write mesh", "check"], names
+assert frame["counts"]["isolated_spheres"] == frame["counts"]["isolated"], frame["counts"]
 raster = root["children"][1]
 assert sum(c["seconds"] for c in raster["children"]) <= raster["seconds"] * 1.0001
 counts = frame["counts"]

@@ -166,10 +166,15 @@ print(v, faces)
 PY
 check "mesh --help" bash -c "'$BIN' mesh --help | grep -q -- '--mesher'"
 check "reconstruct --help" bash -c "'$BIN' reconstruct --help | grep -q -- '--influence'"
-check "reconstruct a generated drop" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop.obj" --vdb "$T/drop_ls.vdb" -q
+check "reconstruct a generated drop" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop.obj" --vdb "$T/drop_ls.vdb" -q --isolated drop
 check "reconstruct: OBJ closed and oriented (independent check)" bash -c "/usr/bin/python3 '$T/objcheck.py' '$T/drop.obj' >/dev/null"
 check "reconstruct --vdb wrote the level set" bash -c "vdb_print '$T/drop_ls.vdb' | grep -q surface"
 check "mesh of that .vdb = reconstruct's mesh" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop2.obj' -q && cmp -s '$T/drop.obj' '$T/drop2.obj'"
+out=$("$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_s.obj")
+n=$(grep -Eo '[0-9]+ isolated particles meshed as spheres' <<<"$out" | grep -Eo '^[0-9]+')
+c0=$("$BIN" info "$T/drop.obj" | grep -Eo '[0-9]+ components' | grep -Eo '[0-9]+')
+c1=$("$BIN" info "$T/drop_s.obj" | grep -Eo '[0-9]+ components' | grep -Eo '[0-9]+')
+check "reconstruct: isolated droplets meshed as spheres by default, one closed component each" bash -c "[ '${n:-0}' -gt 0 ] && [ '$c1' -eq \$(( ${c0:-0} + ${n:-0} )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_s.obj' >/dev/null"
 check "mesh --check says watertight" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop3.ply' --check | grep -q watertight"
 check "mesh --mesher openvdb" bash -c "'$BIN' mesh '$T/drop_ls.vdb' --mesher openvdb -o '$T/dropv.obj' -q && /usr/bin/python3 '$T/objcheck.py' '$T/dropv.obj' >/dev/null"
 check "mesh to .vtk" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop.vtk' -q && head -c 30 '$T/drop.vtk' | grep -q vtk"

@@ -130,6 +130,18 @@ Runner addMeshCommand(CLI::App& app)
     };
 }
 
+/// What became of a frame's isolated particles, for its line.
+std::string isolatedFate(const ReconstructParams& params, const ReconstructResult& res)
+{
+    if (params.field.keepIsolated) return "kept in the field as spheres";
+    if (params.post.isolated == IsolatedMode::Drop) return "left out";
+    std::string s = "meshed as spheres";
+    if (res.isolatedSpheres < res.isolatedParticles.size())
+        s += " (" + std::to_string(res.isolatedParticles.size() - res.isolatedSpheres) +
+             " too far from the origin for float32, left out)";
+    return s;
+}
+
 Runner addReconstructCommand(CLI::App& app)
 {
     auto o = std::make_shared<MeshOptions>();
@@ -141,6 +153,12 @@ Runner addReconstructCommand(CLI::App& app)
     addMeshOutputOptions(cmd, *o);
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
                   "drop particles with NaN/Inf coordinates instead of failing");
+    cmd->add_option("--isolated", o->pipeline.isolated,
+                    "isolated particles (no neighbour within h), which the field leaves out: "
+                    "spheres (each a closed icosphere of its radius, faces within 1% of it) or "
+                    "drop (left out of the mesh)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"spheres", "drop"}));
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
@@ -180,11 +198,11 @@ Runner addReconstructCommand(CLI::App& app)
                 if (!po.quiet && !bar.enabled() && (res.field.isolated || ri.droppedNonFinite))
                     std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",
                                 jobs[i].input.c_str(), res.field.isolated,
-                                params.field.keepIsolated ? "kept as spheres" : "left out",
-                                ri.droppedNonFinite);
+                                isolatedFate(params, res).c_str(), ri.droppedNonFinite);
                 warnIfEmpty(jobs[i].input, ps, res.field, params.radius, res.mesh.empty());
                 std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
                 counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
+                counts.push_back({"isolated_spheres", double(res.isolatedSpheres)});
                 writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
                                &res.field);
                 stopIfInterrupted(ctx);

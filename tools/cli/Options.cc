@@ -141,6 +141,7 @@ ReconstructParams PipelineOptions::resolved() const
     p.field.method = methodFromName(method);
     p.field.perParticleRadii = !ignoreRadiusAttribute;
     p.mesh.mesher = mesherFromName(mesher);
+    p.post.isolated = isolatedModeFromName(isolated);
     return p;
 }
 

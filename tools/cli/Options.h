@@ -23,7 +23,8 @@ namespace cli {
 struct PipelineOptions
 {
     ReconstructParams params; ///< params.field: lengths in r
-    std::string field = "ssp07", method = "narrow-band", device = "cpu", mesher = "mc";
+    std::string field = "ssp07", method = "narrow-band", device = "cpu", mesher = "mc",
+                isolated = "spheres";
     bool ignoreRadiusAttribute = false;
     int threads = 0;
     bool quiet = false, verbose = false, check = false;

@@ -1,7 +1,8 @@
 // Reconstruct.h - the whole reconstruction as one call (DESIGN.md, "Pipeline and layout"):
 //
 //   particles -> radius choice -> rasterizeParticles (neighbors, classify, narrow band, field,
-//   level set) -> meshLevelSet (marching cubes) -> [post-processing, ch. 5] -> result
+//   level set) -> meshLevelSet (marching cubes) -> post-processing (ch. 5: isolated particles
+//   as spheres; decimation and subdivision to come) -> result
 //
 // Front ends (the CLI, the benchmark, later Python) are thin layers over this header; the two
 // halves, rasterizeParticles (Rasterize.h) and meshLevelSet (MeshLevelSet.h), stay public.
@@ -32,9 +33,24 @@ struct MeshParams
     Mesher mesher = Mesher::MarchingCubes;
 };
 
-/// Mesh post-processing (thesis chapter 5: decimation, subdivision, isolated spheres): to come.
+/// What becomes of isolated particles (no neighbour within h): the field leaves them out
+/// (unless Params::keepIsolated), so without a shape of their own they vanish from the mesh.
+enum class IsolatedMode {
+    Drop,   ///< left out of the mesh (still listed in ReconstructResult::isolatedParticles)
+    Spheres ///< each a closed icosphere of its radius, a component of its own (thesis §5.2.3)
+};
+const char* isolatedModeName(IsolatedMode m);               ///< "drop", "spheres"
+IsolatedMode isolatedModeFromName(const std::string& name); ///< ValueError for unknown names
+
+/// Mesh post-processing (thesis chapter 5). Decimation and subdivision: to come.
 struct PostProcessParams
 {
+    /// Spheres by default, as the thesis: a droplet is part of the fluid, and dropping it
+    /// silently loses it from the mesh.
+    IsolatedMode isolated = IsolatedMode::Spheres;
+    /// How far the spheres' faces may dip inside radius r, as a fraction of r: it picks the
+    /// icosphere level (0.01: level 3, 1,280 triangles per sphere). (0, 0.5].
+    double sphereDeviation = 0.01;
 };
 
 /// The curvature-adaptive 3-level grid (thesis chapter 6): to come.
@@ -83,6 +99,9 @@ struct ReconstructResult
     openvdb::FloatGrid::Ptr levelSet; ///< the "surface" level set (Rasterize.h)
     TriangleMesh mesh;
     std::vector<uint32_t> isolatedParticles; ///< input indices left out of the surface
+    /// Of them, appended to mesh as spheres (IsolatedMode::Spheres): all but those too far from
+    /// the origin for float32 to place a sphere's vertices (beyond ~8,000 radii).
+    size_t isolatedSpheres = 0;
     RadiusChoice radius;
     RasterizeStats field;
     MeshStats meshing;

@@ -4,7 +4,11 @@
 #include <fluidsurf/Reconstruct.h>
 #include <fluidsurf/SpacingEstimate.h>
 
+#include "post/IsolatedSpheres.h"
+
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace fluidsurf {
 
@@ -27,6 +31,46 @@ Params ReconstructParams::fieldParams(double r) const
     p.bandWidth = field.bandWidth * r;
     return p;
 }
+
+const char* isolatedModeName(IsolatedMode m)
+{
+    return m == IsolatedMode::Drop ? "drop" : "spheres";
+}
+
+IsolatedMode isolatedModeFromName(const std::string& name)
+{
+    if (name == "drop") return IsolatedMode::Drop;
+    if (name == "spheres") return IsolatedMode::Spheres;
+    throw ValueError("unknown isolated-particle mode '" + name + "' (drop, spheres)");
+}
+
+namespace {
+
+/// Isolated particles as icospheres of their radius: the radius attribute's value where the field
+/// used it, r otherwise. A sphere is left out where float32 cannot place its vertices within
+/// 0.1% of its radius (centres beyond ~8,000 radii from the origin): it would collapse into
+/// degenerate triangles. Returns the spheres appended.
+size_t appendIsolatedSpheres(TriangleMesh& mesh, const ParticleSet& ps,
+                             const std::vector<uint32_t>& isolated, const ReconstructParams& params,
+                             double r)
+{
+    const Attribute* a = params.field.perParticleRadii ? ps.find(AttributeRole::Radius) : nullptr;
+    if (a && a->floats.size() != ps.positions.size()) a = nullptr; // as particleRadii does
+    std::vector<Vec3f> centres;
+    std::vector<float> radii;
+    for (uint32_t i : isolated) {
+        const Vec3f& c = ps.positions[i];
+        const float radius = a ? a->floats[i] : float(r);
+        const float far = std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)});
+        if (far * std::numeric_limits<float>::epsilon() > 1e-3f * radius) continue;
+        centres.push_back(c);
+        radii.push_back(radius);
+    }
+    post::appendSpheres(mesh, centres, radii, post::icosphereLevelFor(params.post.sphereDeviation));
+    return centres.size();
+}
+
+} // namespace
 
 const char* radiusSourceName(RadiusSource s)
 {
@@ -70,6 +114,9 @@ RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute
 ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructParams& params,
                               Context& ctx, const std::string& sourceName)
 {
+    if (!(params.post.sphereDeviation > 0 && params.post.sphereDeviation <= 0.5))
+        throw ValueError("sphere deviation " + std::to_string(params.post.sphereDeviation) +
+                         " (a fraction of r in (0, 0.5])");
     ReconstructResult res;
     res.radius = chooseRadius(particles, params.radius, params.field.perParticleRadii);
     RasterizeResult field =
@@ -79,6 +126,13 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
     res.isolatedParticles = std::move(field.isolatedParticles);
     res.field = std::move(field.stats);
     res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing);
+    ctx.throwIfCancelled();
+    const auto post = ctx.scope("post"); // always there: timing trees keep one shape
+    if (params.post.isolated == IsolatedMode::Spheres && !res.isolatedParticles.empty()) {
+        const auto t = ctx.scope("isolated spheres");
+        res.isolatedSpheres = appendIsolatedSpheres(res.mesh, particles, res.isolatedParticles,
+                                                    params, res.radius.radius);
+    }
     return res;
 }
 

@@ -1,5 +1,6 @@
-// ReconstructTest.cc - the one library call: it equals its two halves, chooses and reports the
-// radius, keeps the timing tree, honours the thread limit, and stops cleanly when cancelled.
+// ReconstructTest.cc - the one library call: it equals its two halves (plus isolated particles
+// as spheres), chooses and reports the radius, keeps the timing tree, honours the thread limit,
+// and stops cleanly when cancelled.
 #include "TestData.h"
 
 #include <fluidsurf/MeshCheck.h>
@@ -14,6 +15,7 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 namespace fluidsurf {
@@ -30,8 +32,9 @@ TEST(Reconstruct, EqualsItsTwoHalvesAndIsWatertight)
     sp.count = 20000;
     const ParticleSet ps = generateScene(Scene::Drop, sp);
     Context ctx;
-    const ReconstructResult res =
-        reconstruct(ps, ReconstructParams::fromRadius(sp.radius), ctx, "drop");
+    ReconstructParams params = ReconstructParams::fromRadius(sp.radius);
+    params.post.isolated = IsolatedMode::Drop; // the two halves alone; spheres: the next test
+    const ReconstructResult res = reconstruct(ps, params, ctx, "drop");
     const RasterizeResult half = rasterizeParticles(ps, Params::fromRadius(sp.radius), "drop");
     EXPECT_EQ(res.levelSet->activeVoxelCount(), half.grid->activeVoxelCount());
     EXPECT_TRUE(res.levelSet->tree().hasSameTopology(half.grid->tree()));
@@ -45,6 +48,66 @@ TEST(Reconstruct, EqualsItsTwoHalvesAndIsWatertight)
     EXPECT_EQ(res.meshing.triangles, res.mesh.triangles.size());
     EXPECT_EQ(res.radius.source, RadiusSource::Given);
     EXPECT_EQ(res.radius.radius, sp.radius);
+    EXPECT_EQ(res.isolatedSpheres, 0u);
+}
+
+TEST(Reconstruct, IsolatedParticlesBecomeSpheresOfTheirRadius)
+{
+    SceneParams sp;
+    sp.count = 20000;
+    ParticleSet ps = generateScene(Scene::Drop, sp);
+    ps.attributes.clear();
+    Context a, b;
+    ReconstructParams drop = ReconstructParams::fromRadius(sp.radius);
+    drop.post.isolated = IsolatedMode::Drop;
+    const ReconstructResult plain = reconstruct(ps, drop, a);
+    const ReconstructResult res = reconstruct(ps, ReconstructParams::fromRadius(sp.radius), b);
+    ASSERT_EQ(res.isolatedParticles.size(), size_t(sp.droplets));
+    ASSERT_EQ(res.isolatedSpheres, res.isolatedParticles.size());
+    // the surface first, unchanged, then one closed sphere per isolated particle
+    const size_t nv = plain.mesh.points.size(), nt = plain.mesh.triangles.size();
+    ASSERT_GT(res.mesh.points.size(), nv);
+    EXPECT_TRUE(
+        std::equal(plain.mesh.points.begin(), plain.mesh.points.end(), res.mesh.points.begin()));
+    EXPECT_TRUE(std::equal(plain.mesh.triangles.begin(), plain.mesh.triangles.end(),
+                           res.mesh.triangles.begin()));
+    const MeshReport with = checkMesh(res.mesh), without = checkMesh(plain.mesh);
+    EXPECT_TRUE(with.watertight()) << describe(with);
+    EXPECT_EQ(with.components, without.components + size_t(sp.droplets));
+    const double sphere = 4.0 / 3.0 * M_PI * std::pow(sp.radius, 3);
+    EXPECT_GT(with.volume - without.volume, 0.97 * sp.droplets * sphere);
+    EXPECT_LT(with.volume - without.volume, 1.00 * sp.droplets * sphere);
+    const size_t per = (res.mesh.points.size() - nv) / size_t(sp.droplets);
+    ASSERT_EQ(res.mesh.points.size(), nv + per * size_t(sp.droplets));
+    for (size_t s = 0; s < size_t(sp.droplets); ++s) {
+        const Vec3f c = ps.positions[res.isolatedParticles[s]];
+        for (size_t i = 0; i < per; ++i) {
+            const Vec3f d = res.mesh.points[nv + s * per + i] - c;
+            const double dist =
+                std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z);
+            ASSERT_NEAR(dist, sp.radius, 0.01 * sp.radius);
+        }
+    }
+    EXPECT_GT(res.mesh.triangles.size(), nt);
+    // a radius attribute gives each sphere its own radius: twice r for the isolated ones
+    std::vector<float> radius(ps.size(), float(sp.radius));
+    for (uint32_t i : res.isolatedParticles)
+        radius[i] = float(2 * sp.radius);
+    ps.addFloat("pscale", 1, radius);
+    Context c;
+    const ReconstructResult big = reconstruct(ps, ReconstructParams::fromRadius(sp.radius), c);
+    const size_t bigStart = big.mesh.points.size() - per * size_t(sp.droplets);
+    for (size_t s = 0; s < size_t(sp.droplets); ++s) {
+        const Vec3f d =
+            big.mesh.points[bigStart + s * per] - ps.positions[big.isolatedParticles[s]];
+        EXPECT_NEAR(std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z),
+                    2 * sp.radius, 0.01 * sp.radius);
+    }
+    ReconstructParams bad = ReconstructParams::fromRadius(sp.radius);
+    bad.post.sphereDeviation = 0;
+    EXPECT_THROW(reconstruct(ps, bad, c), ValueError);
+    EXPECT_THROW(isolatedModeFromName("balls"), ValueError);
+    EXPECT_EQ(isolatedModeFromName(isolatedModeName(IsolatedMode::Drop)), IsolatedMode::Drop);
 }
 
 TEST(Reconstruct, FieldLengthsAreInUnitsOfR)
@@ -107,10 +170,13 @@ TEST(Reconstruct, TimingTreeNestsTheStages)
     ctx.timing().finish();
     const TimingTree& t = ctx.timing();
     const auto& nodes = t.nodes();
-    // Top level: rasterize, then mesh; the field's stages nest inside rasterize.
-    ASSERT_EQ(t.root().children.size(), 2u);
+    // Top level: rasterize, mesh, then post (there even with nothing to do: a ball has no
+    // isolated particles); the field's stages nest inside rasterize.
+    ASSERT_EQ(t.root().children.size(), 3u);
     EXPECT_EQ(nodes[t.root().children[0]].name, "rasterize");
     EXPECT_EQ(nodes[t.root().children[1]].name, "mesh");
+    EXPECT_EQ(nodes[t.root().children[2]].name, "post");
+    EXPECT_TRUE(nodes[t.root().children[2]].children.empty());
     std::vector<std::string> inner;
     double sum = 0;
     for (size_t c : nodes[t.root().children[0]].children)
