@@ -174,6 +174,10 @@ out=$("$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_s.obj")
 n=$(grep -Eo '[0-9]+ isolated particles meshed as spheres' <<<"$out" | grep -Eo '^[0-9]+')
 c0=$("$BIN" info "$T/drop.obj" | grep -Eo '[0-9]+ components' | grep -Eo '[0-9]+')
 c1=$("$BIN" info "$T/drop_s.obj" | grep -Eo '[0-9]+ components' | grep -Eo '[0-9]+')
+t0=$("$BIN" info "$T/drop.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
+"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_sub.obj" -q --isolated drop --subdivide 1
+t1=$("$BIN" info "$T/drop_sub.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
+check "reconstruct --subdivide 1: four times the triangles, still closed and oriented" bash -c "[ '${t1:-0}' -eq \$(( 4 * ${t0:-1} )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_sub.obj' >/dev/null"
 check "reconstruct: isolated droplets meshed as spheres by default, one closed component each" bash -c "[ '${n:-0}' -gt 0 ] && [ '$c1' -eq \$(( ${c0:-0} + ${n:-0} )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_s.obj' >/dev/null"
 check "mesh --check says watertight" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop3.ply' --check | grep -q watertight"
 check "mesh --mesher openvdb" bash -c "'$BIN' mesh '$T/drop_ls.vdb' --mesher openvdb -o '$T/dropv.obj' -q && /usr/bin/python3 '$T/objcheck.py' '$T/dropv.obj' >/dev/null"

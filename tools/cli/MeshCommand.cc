@@ -159,6 +159,11 @@ Runner addReconstructCommand(CLI::App& app)
                     "drop (left out of the mesh)")
         ->capture_default_str()
         ->check(CLI::IsMember({"spheres", "drop"}));
+    cmd->add_option("--subdivide", o->pipeline.params.post.subdivide,
+                    "Loop subdivision steps on the surface (each 4x the triangles; normals then "
+                    "angle-weighted); 0 to 3")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 3));
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"

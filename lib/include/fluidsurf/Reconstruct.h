@@ -42,9 +42,14 @@ enum class IsolatedMode {
 const char* isolatedModeName(IsolatedMode m);               ///< "drop", "spheres"
 IsolatedMode isolatedModeFromName(const std::string& name); ///< ValueError for unknown names
 
-/// Mesh post-processing (thesis chapter 5). Decimation and subdivision: to come.
+/// Mesh post-processing (thesis chapter 5), in this order: (decimation: to come), Loop
+/// subdivision, isolated particles as spheres.
 struct PostProcessParams
 {
+    /// Loop subdivision steps, each 4x the triangles, normals then angle-weighted (0 to 3). The
+    /// thesis runs one after decimation; until decimation is here the default is none, since
+    /// on the raw mesh it only multiplies the triangles.
+    int subdivide = 0;
     /// Spheres by default, as the thesis: a droplet is part of the fluid, and dropping it
     /// silently loses it from the mesh.
     IsolatedMode isolated = IsolatedMode::Spheres;

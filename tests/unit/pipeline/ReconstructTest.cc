@@ -2,6 +2,8 @@
 // as spheres), chooses and reports the radius, keeps the timing tree, honours the thread limit,
 // and stops cleanly when cancelled.
 #include "TestData.h"
+#include "post/IsolatedSpheres.h"
+#include "post/LoopSubdivision.h"
 
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/Reconstruct.h>
@@ -108,6 +110,33 @@ TEST(Reconstruct, IsolatedParticlesBecomeSpheresOfTheirRadius)
     EXPECT_THROW(reconstruct(ps, bad, c), ValueError);
     EXPECT_THROW(isolatedModeFromName("balls"), ValueError);
     EXPECT_EQ(isolatedModeFromName(isolatedModeName(IsolatedMode::Drop)), IsolatedMode::Drop);
+}
+
+TEST(Reconstruct, SubdivisionComesBeforeTheSpheres)
+{
+    SceneParams sp;
+    sp.count = 20000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    ReconstructParams drop = ReconstructParams::fromRadius(sp.radius);
+    drop.post.isolated = IsolatedMode::Drop;
+    Context a, b;
+    const ReconstructResult plain = reconstruct(ps, drop, a);
+    ReconstructParams params = ReconstructParams::fromRadius(sp.radius);
+    params.post.subdivide = 1;
+    const ReconstructResult res = reconstruct(ps, params, b);
+    const TriangleMesh smooth = post::loopSubdivide(plain.mesh);
+    ASSERT_EQ(res.isolatedSpheres, size_t(sp.droplets));
+    ASSERT_GT(res.mesh.points.size(), smooth.points.size());
+    EXPECT_TRUE(std::equal(smooth.points.begin(), smooth.points.end(), res.mesh.points.begin()));
+    EXPECT_TRUE(
+        std::equal(smooth.triangles.begin(), smooth.triangles.end(), res.mesh.triangles.begin()));
+    EXPECT_EQ(res.mesh.triangles.size(),
+              4 * plain.mesh.triangles.size() +
+                  size_t(sp.droplets) * post::unitIcosphere(3).triangles.size());
+    EXPECT_TRUE(checkMesh(res.mesh).watertight());
+    EXPECT_TRUE(b.timing().has("subdivide"));
+    params.post.subdivide = 4;
+    EXPECT_THROW(reconstruct(ps, params, b), ValueError);
 }
 
 TEST(Reconstruct, FieldLengthsAreInUnitsOfR)

@@ -1,0 +1,146 @@
+// LoopSubdivision.cc - one Loop subdivision step (see LoopSubdivision.h).
+//
+// Edges are found by sorting every triangle side by (lower end, upper end, triangle): the keys
+// are unique, so a parallel sort gives one order on every run, and each group of equal ends is
+// one edge with its one, two or more triangles. Points are then computed in parallel, each from
+// a fixed list of inputs summed in a fixed order.
+#include "post/LoopSubdivision.h"
+
+#include "post/Normals.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <cmath>
+
+namespace fluidsurf {
+namespace post {
+
+namespace {
+
+struct Side
+{
+    uint32_t lo, hi, tri;
+    uint8_t k; ///< the side runs from corner k to corner k + 1 of its triangle
+    bool operator<(const Side& o) const
+    {
+        return lo != o.lo ? lo < o.lo : hi != o.hi ? hi < o.hi : tri < o.tri;
+    }
+};
+
+struct P3
+{
+    double x = 0, y = 0, z = 0;
+    void add(const Vec3f& p, double w) { x += w * p.x, y += w * p.y, z += w * p.z; }
+    Vec3f f() const { return Vec3f(float(x), float(y), float(z)); }
+};
+
+/// Loop's weight of each of n neighbours of a smooth point.
+double beta(size_t n)
+{
+    const double c = 3.0 / 8.0 + std::cos(2.0 * M_PI / double(n)) / 4.0;
+    return (5.0 / 8.0 - c * c) / double(n);
+}
+
+} // namespace
+
+TriangleMesh loopSubdivide(const TriangleMesh& in)
+{
+    const size_t nv = in.points.size(), nt = in.triangles.size();
+    std::vector<Side> sides(3 * nt);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t t = r.begin(); t != r.end(); ++t)
+            for (uint8_t k = 0; k < 3; ++k) {
+                const uint32_t a = in.triangles[t][k], b = in.triangles[t][(k + 1) % 3];
+                sides[3 * t + k] = {std::min(a, b), std::max(a, b), uint32_t(t), k};
+            }
+    });
+    tbb::parallel_sort(sides.begin(), sides.end());
+
+    // edges: [first[e], first[e + 1]) are its sides; each triangle side's edge
+    std::vector<uint32_t> first;
+    std::vector<std::array<uint32_t, 3>> sideEdge(nt);
+    for (size_t i = 0; i < sides.size(); ++i) {
+        if (i == 0 || sides[i].lo != sides[i - 1].lo || sides[i].hi != sides[i - 1].hi)
+            first.push_back(uint32_t(i));
+        sideEdge[sides[i].tri][sides[i].k] = uint32_t(first.size() - 1);
+    }
+    const size_t ne = first.size();
+    first.push_back(uint32_t(sides.size()));
+    auto crease = [&](size_t e) { return first[e + 1] - first[e] != 2; };
+
+    // each point's edges, in edge order
+    std::vector<uint32_t> start(nv + 1, 0), incident(2 * ne);
+    for (size_t e = 0; e < ne; ++e)
+        ++start[sides[first[e]].lo + 1], ++start[sides[first[e]].hi + 1];
+    for (size_t v = 0; v < nv; ++v)
+        start[v + 1] += start[v];
+    {
+        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+        for (size_t e = 0; e < ne; ++e)
+            incident[fill[sides[first[e]].lo]++] = uint32_t(e),
+            incident[fill[sides[first[e]].hi]++] = uint32_t(e);
+    }
+
+    TriangleMesh out;
+    out.points.resize(nv + ne);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t v = r.begin(); v != r.end(); ++v) {
+            const Vec3f& p = in.points[v];
+            const size_t n = start[v + 1] - start[v];
+            size_t creases = 0;
+            P3 around, along;
+            for (uint32_t i = start[v]; i < start[v + 1]; ++i) {
+                const size_t e = incident[i];
+                const Side& s = sides[first[e]];
+                const Vec3f& q = in.points[s.lo == v ? s.hi : s.lo];
+                around.add(q, 1);
+                if (crease(e)) ++creases, along.add(q, 1);
+            }
+            P3 moved;
+            if (n == 0 || creases > 2 || creases == 1) {
+                moved.add(p, 1); // unused, a corner of creases, or the end of one: stays
+            } else if (creases == 2) {
+                moved.add(p, 0.75), moved.x += along.x / 8, moved.y += along.y / 8,
+                    moved.z += along.z / 8;
+            } else {
+                const double b = beta(n);
+                moved.add(p, 1 - double(n) * b);
+                moved.x += b * around.x, moved.y += b * around.y, moved.z += b * around.z;
+            }
+            out.points[v] = moved.f();
+        }
+    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ne), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t e = r.begin(); e != r.end(); ++e) {
+            const Side& s = sides[first[e]];
+            P3 q;
+            if (crease(e)) {
+                q.add(in.points[s.lo], 0.5), q.add(in.points[s.hi], 0.5);
+            } else {
+                q.add(in.points[s.lo], 3.0 / 8), q.add(in.points[s.hi], 3.0 / 8);
+                for (uint32_t i = first[e]; i < first[e + 1]; ++i) // the two opposite corners
+                    q.add(in.points[in.triangles[sides[i].tri][(sides[i].k + 2) % 3]], 1.0 / 8);
+            }
+            out.points[nv + e] = q.f();
+        }
+    });
+    out.triangles.resize(4 * nt);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t t = r.begin(); t != r.end(); ++t) {
+            const auto& [a, b, c] = in.triangles[t];
+            const uint32_t ab = uint32_t(nv + sideEdge[t][0]), bc = uint32_t(nv + sideEdge[t][1]),
+                           ca = uint32_t(nv + sideEdge[t][2]);
+            out.triangles[4 * t + 0] = {a, ab, ca};
+            out.triangles[4 * t + 1] = {b, bc, ab};
+            out.triangles[4 * t + 2] = {c, ca, bc};
+            out.triangles[4 * t + 3] = {ab, bc, ca};
+        }
+    });
+    computeAngleWeightedNormals(out);
+    return out;
+}
+
+} // namespace post
+} // namespace fluidsurf

@@ -1,0 +1,20 @@
+// LoopSubdivision.h - Loop subdivision (Loop 1987; thesis §5.2.2): after decimation has made a
+// mesh coarse and its edges sharp, one step rounds them off again at four times the triangles.
+#pragma once
+
+#include <fluidsurf/Mesh.h>
+
+namespace fluidsurf {
+namespace post {
+
+/// One Loop step: every triangle cut into four (orientation kept); a new point on each edge at
+/// 3/8 of its two ends and 1/8 of the two opposite corners; each old point moved towards its n
+/// neighbours with Loop's weight beta(n). Edges of one triangle (a boundary) or of three or more
+/// (non-manifold) are creases: their new points are midpoints and their points follow the cubic
+/// B-spline along them, corners rounded like the rest (a point on other than two creases stays).
+/// Old points keep their indices, edge points follow in edge order; normals are recomputed
+/// (angle-weighted). The same bits for any thread count.
+TriangleMesh loopSubdivide(const TriangleMesh& mesh);
+
+} // namespace post
+} // namespace fluidsurf
