@@ -178,6 +178,13 @@ t0=$("$BIN" info "$T/drop.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -
 "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_sub.obj" -q --isolated drop --subdivide 1
 t1=$("$BIN" info "$T/drop_sub.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
 check "reconstruct --subdivide 1: four times the triangles, still closed and oriented" bash -c "[ '${t1:-0}' -eq \$(( 4 * ${t0:-1} )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_sub.obj' >/dev/null"
+"$BIN" post "$T/drop.obj" -o "$T/drop_post.obj" -q
+t2=$("$BIN" info "$T/drop_post.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
+check "post: one Loop step by default, the same mesh as reconstruct --subdivide 1" bash -c "[ '${t2:-0}' -eq '${t1:-1}' ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_post.obj' >/dev/null"
+head -c 3000 "$T/drop.obj" >"$T/cut_mesh.obj"
+expect_error "post: a cut OBJ is one error, no output" "cut_mesh.obj" "$BIN" post "$T/cut_mesh.obj" -o "$T/cut_post.obj"
+check "post: nothing written for the cut OBJ" test ! -e "$T/cut_post.obj"
+check "post --help has examples" bash -c "'$BIN' post --help | grep -q 'fluidsurf post frame.obj'"
 check "reconstruct: isolated droplets meshed as spheres by default, one closed component each" bash -c "[ '${n:-0}' -gt 0 ] && [ '$c1' -eq \$(( ${c0:-0} + ${n:-0} )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_s.obj' >/dev/null"
 check "mesh --check says watertight" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop3.ply' --check | grep -q watertight"
 check "mesh --mesher openvdb" bash -c "'$BIN' mesh '$T/drop_ls.vdb' --mesher openvdb -o '$T/dropv.obj' -q && /usr/bin/python3 '$T/objcheck.py' '$T/dropv.obj' >/dev/null"

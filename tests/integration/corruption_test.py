@@ -56,6 +56,7 @@ for ext in ("vdb", "bgeo.gz", "ply", "xyz", "vtk"):
 run(["convert", "-q", S("frame.bgeo"), S("plain.bgeo")])  # the real .bgeo is gzip'd
 run(["rasterize", "-q", S("frame.bgeo"), "-r", R, "-o", S("surface.vdb")])
 run(["reconstruct", "-q", S("frame.bgeo"), "-r", R, "-o", S("mesh.obj")])
+run(["reconstruct", "-q", S("frame.bgeo"), "-r", R, "-o", S("mesh.ply")])
 xyz = read(S("frame.xyz"))
 points = [struct.unpack_from("<3f", xyz, 12 * i) for i in range(len(xyz) // 12)]
 with open(S("frame.csv"), "w") as f:
@@ -324,12 +325,18 @@ add("ls_leafchunk_big.vdb", patch(chunk, struct.pack("<q", 1 << 40)), "leaf chun
 add("ls_leafblosc.vdb", patch(chunk + 8 + 4, struct.pack("<I", 1 << 30)), "blosc header: 1 GiB inside", LEVELSET)
 add("ls_points.vdb", vdb, "a points VDB where a level set belongs", ("mesh",))
 
-# meshes, through info
+# meshes, through info and post
+MESH = ("info", "post")
 obj = read(S("mesh.obj"))
-add("mesh_index.obj", obj + b"f 1 2 99999999\n", "face index past the vertices", ("info",))
-add("mesh_zero.obj", obj + b"f 0 1 2\n", "face index 0", ("info",))
-add("mesh_vertex.obj", b"v 1 2\n" + obj, "a vertex with two coordinates", ("info",))
-add("mesh_word.obj", b"v 1 x 2\n" + obj, "a word where a number belongs", ("info",))
+add("mesh_index.obj", obj + b"f 1 2 99999999\n", "face index past the vertices", MESH)
+add("mesh_zero.obj", obj + b"f 0 1 2\n", "face index 0", MESH)
+add("mesh_vertex.obj", b"v 1 2\n" + obj, "a vertex with two coordinates", MESH)
+add("mesh_word.obj", b"v 1 x 2\n" + obj, "a word where a number belongs", MESH)
+# an OBJ has no counts: a cut is seen only where it leaves half a line, or (post) no faces; these
+# fall among the vertices and normals, which come first
+cuts("mesh", "obj", obj, (0.1,), MESH)
+cuts("mesh", "obj", obj, (0.25,), ("post",))
+cuts("mesh", "ply", read(S("mesh.ply")), (0.01, 0.3, 0.7, 0.999), MESH)
 
 # files that are not regular files
 os.mkfifo(os.path.join(bad_dir, "fifo.bgeo"))
@@ -358,6 +365,8 @@ def command(cmd, path):
                 "--vdb", os.path.join(out_dir, "out.vdb")], "out.obj"
     if cmd == "mesh":
         return ["mesh", path, "-o", os.path.join(out_dir, "out.obj")], "out.obj"
+    if cmd == "post":
+        return ["post", path, "-o", os.path.join(out_dir, "out.obj")], "out.obj"
     raise ValueError(cmd)
 
 

@@ -18,6 +18,7 @@ Runner addGenerateCommand(CLI::App& app);
 Runner addRasterizeCommand(CLI::App& app);
 Runner addMeshCommand(CLI::App& app);
 Runner addReconstructCommand(CLI::App& app);
+Runner addPostCommand(CLI::App& app);
 
 } // namespace cli
 } // namespace fluidsurf

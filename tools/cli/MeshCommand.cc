@@ -1,5 +1,6 @@
-// MeshCommand.cc - `fluidsurf mesh IN.vdb -o OUT.obj` (level set -> mesh: meshLevelSet) and
-// `fluidsurf reconstruct IN -o OUT.obj [--vdb OUT.vdb]` (particles -> mesh: reconstruct).
+// MeshCommand.cc - `fluidsurf mesh IN.vdb -o OUT.obj` (level set -> mesh: meshLevelSet),
+// `fluidsurf reconstruct IN -o OUT.obj [--vdb OUT.vdb]` (particles -> mesh: reconstruct) and
+// `fluidsurf post IN.obj -o OUT.obj` (mesh -> mesh: postProcessMesh).
 // Parse -> params -> one library call -> write -> report.
 #include "Commands.h"
 #include "Frames.h"
@@ -29,12 +30,12 @@ struct MeshOptions
     bool dropNonFinite = false;
 };
 
-void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o)
+void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o, Makes makes = Makes::MeshedLevelSet)
 {
     cmd->add_option("-o,--output", o.output, "output mesh (.obj, .ply or .vtk) or pattern")
         ->required();
     cmd->add_option("--frames", o.frames, "frame range A-B for a pattern");
-    addRunOptions(cmd, o.pipeline, true);
+    addRunOptions(cmd, o.pipeline, makes);
 }
 
 std::vector<FrameJob> planMeshJobs(const MeshOptions& o)
@@ -140,6 +141,61 @@ std::string isolatedFate(const ReconstructParams& params, const ReconstructResul
         s += " (" + std::to_string(res.isolatedParticles.size() - res.isolatedSpheres) +
              " too far from the origin for float32, left out)";
     return s;
+}
+
+Runner addPostCommand(CLI::App& app)
+{
+    auto o = std::make_shared<MeshOptions>();
+    o->pipeline.params.post.subdivide = 1; // a post run does a step unless told otherwise
+    CLI::App* cmd = app.add_subcommand(
+        "post", "Post-process triangle mesh(es): Loop subdivision (decimation to come)");
+    cmd->add_option("input", o->input, "mesh file (.obj or .ply) or frame pattern")->required();
+    addMeshOutputOptions(cmd, *o, Makes::Mesh);
+    cmd->add_option("--subdivide", o->pipeline.params.post.subdivide,
+                    "Loop subdivision steps (each 4x the triangles; normals then "
+                    "angle-weighted); 0 to 3")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 3));
+    cmd->footer("Examples:\n"
+                "  fluidsurf post frame.obj -o frame_smooth.obj\n"
+                "  fluidsurf post 'obj/f_{:04}.obj' -o 'smooth/f_{:04}.ply' --frames 1-100\n"
+                "Reads any triangle mesh (.obj, .ply) as the readers of particle files do: a\n"
+                "broken file is one error and no output. Borders and non-manifold edges are\n"
+                "kept as creases; a closed, oriented mesh stays so.");
+    return [o]() {
+        const PipelineOptions& po = o->pipeline;
+        const auto jobs = planMeshJobs(*o);
+        refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
+        Context ctx;
+        const auto threadLimit = po.setUp(ctx);
+        Progress bar(jobs.size(), "post", po.quiet);
+        Report report(po);
+        for (size_t i = 0; i < jobs.size(); ++i)
+            forFile(jobs[i].input, [&] {
+                bar.update(i, jobs[i].input);
+                ctx.timing().clear();
+                TriangleMesh mesh;
+                {
+                    const auto t = ctx.scope("read");
+                    mesh = io::readMesh(jobs[i].input);
+                }
+                if (mesh.triangles.empty())
+                    throw InputError(jobs[i].input + ": no triangles to post-process (" +
+                                     std::to_string(mesh.points.size()) +
+                                     " vertices: a point cloud, or a file cut short?)");
+                stopIfInterrupted(ctx);
+                {
+                    const auto t = ctx.scope("post");
+                    mesh = postProcessMesh(std::move(mesh), po.params.post, ctx);
+                }
+                io::OutputGroup outputs;
+                writeAndReport(*o, ctx, mesh, jobs[i], bar.enabled(), report, outputs, {});
+                stopIfInterrupted(ctx);
+            });
+        bar.finish();
+        report.finish();
+        return 0;
+    };
 }
 
 Runner addReconstructCommand(CLI::App& app)

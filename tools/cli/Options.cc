@@ -114,17 +114,17 @@ void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
                   "isolated particles become spheres of radius r in the grid");
 }
 
-void addRunOptions(CLI::App* cmd, PipelineOptions& o, bool meshing)
+void addRunOptions(CLI::App* cmd, PipelineOptions& o, Makes makes)
 {
-    if (meshing) {
+    if (makes == Makes::MeshedLevelSet)
         cmd->add_option("--mesher", o.mesher,
                         "mc (our marching cubes) or openvdb (OpenVDB's volumeToMesh)")
             ->capture_default_str()
             ->check(CLI::IsMember({"mc", "openvdb"}));
+    if (makes != Makes::LevelSet)
         cmd->add_flag("--check", o.check,
                       "check the mesh (boundary and non-manifold edges, orientation, ...) and "
                       "print it");
-    }
     cmd->add_option("-j,--threads", o.threads, "worker threads (default: all cores)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_flag("-q,--quiet", o.quiet, "no progress bar and no per-frame lines");

@@ -38,8 +38,11 @@ struct PipelineOptions
 };
 
 void addFieldOptions(CLI::App* cmd, PipelineOptions& o);
-/// -j, -q, -v, --stats (every pipeline command); --check and --mesher (the meshing ones).
-void addRunOptions(CLI::App* cmd, PipelineOptions& o, bool meshing);
+/// -j, -q, -v, --stats (every pipeline command); --check and --mesher as the command makes.
+/// What a command makes: a level set (no mesh options), a mesh from a level set (--check and
+/// --mesher), or a mesh from a mesh (--check).
+enum class Makes { LevelSet, MeshedLevelSet, Mesh };
+void addRunOptions(CLI::App* cmd, PipelineOptions& o, Makes makes);
 
 /// r for a sequence from its first frame, printed with its source (an estimate as "ESTIMATE").
 double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first);

@@ -34,7 +34,7 @@ Runner addRasterizeCommand(CLI::App& app)
     cmd->add_option("-o,--output", o->output, "output .vdb file or pattern")->required();
     cmd->add_option("--frames", o->frames, "frame range A-B for a pattern");
     addFieldOptions(cmd, o->pipeline);
-    addRunOptions(cmd, o->pipeline, false);
+    addRunOptions(cmd, o->pipeline, Makes::LevelSet);
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
                   "drop particles with NaN/Inf coordinates instead of failing");
     cmd->footer(

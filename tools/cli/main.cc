@@ -54,6 +54,7 @@ int main(int argc, char** argv)
   fluidsurf rasterize frame.bgeo -r 0.025 -o frame.vdb   narrow-band level set
   fluidsurf mesh frame.vdb -o frame.obj                  level set to mesh
   fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj particles to mesh
+  fluidsurf post frame.obj -o smooth.obj                 Loop subdivision of a mesh
 
 Frame sequences: {:04}, #### or %04d in a file name; --frames A-B picks frames,
 otherwise every matching file on disk is used.
@@ -64,6 +65,7 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
     const cli::Runner rasterize = cli::addRasterizeCommand(app);
     const cli::Runner mesh = cli::addMeshCommand(app);
     const cli::Runner reconstruct = cli::addReconstructCommand(app);
+    const cli::Runner post = cli::addPostCommand(app);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
@@ -84,6 +86,7 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
         if (app.got_subcommand("rasterize")) return rasterize();
         if (app.got_subcommand("mesh")) return mesh();
         if (app.got_subcommand("reconstruct")) return reconstruct();
+        if (app.got_subcommand("post")) return post();
     } catch (const fluidsurf::Cancelled&) {
         // Ctrl-C: outputs are written through temporary files, so nothing partial is left.
         std::cerr << "fluidsurf: interrupted; no partial output was written\n";

@@ -18,6 +18,7 @@
 #include <fluidsurf/MeshLevelSet.h>
 #include <fluidsurf/Params.h>
 #include <fluidsurf/ParticleSet.h>
+#include <fluidsurf/PostProcess.h>
 #include <fluidsurf/Rasterize.h>
 
 #include <openvdb/openvdb.h>
@@ -31,31 +32,6 @@ namespace fluidsurf {
 struct MeshParams
 {
     Mesher mesher = Mesher::MarchingCubes;
-};
-
-/// What becomes of isolated particles (no neighbour within h): the field leaves them out
-/// (unless Params::keepIsolated), so without a shape of their own they vanish from the mesh.
-enum class IsolatedMode {
-    Drop,   ///< left out of the mesh (still listed in ReconstructResult::isolatedParticles)
-    Spheres ///< each a closed icosphere of its radius, a component of its own (thesis §5.2.3)
-};
-const char* isolatedModeName(IsolatedMode m);               ///< "drop", "spheres"
-IsolatedMode isolatedModeFromName(const std::string& name); ///< ValueError for unknown names
-
-/// Mesh post-processing (thesis chapter 5), in this order: (decimation: to come), Loop
-/// subdivision, isolated particles as spheres.
-struct PostProcessParams
-{
-    /// Loop subdivision steps, each 4x the triangles, normals then angle-weighted (0 to 3). The
-    /// thesis runs one after decimation; until decimation is here the default is none, since
-    /// on the raw mesh it only multiplies the triangles.
-    int subdivide = 0;
-    /// Spheres by default, as the thesis: a droplet is part of the fluid, and dropping it
-    /// silently loses it from the mesh.
-    IsolatedMode isolated = IsolatedMode::Spheres;
-    /// How far the spheres' faces may dip inside radius r, as a fraction of r: it picks the
-    /// icosphere level (0.01: level 3, 1,280 triangles per sphere). (0, 0.5].
-    double sphereDeviation = 0.01;
 };
 
 /// The curvature-adaptive 3-level grid (thesis chapter 6): to come.

@@ -5,7 +5,6 @@
 #include <fluidsurf/SpacingEstimate.h>
 
 #include "post/IsolatedSpheres.h"
-#include "post/LoopSubdivision.h"
 
 #include <algorithm>
 #include <cmath>
@@ -31,18 +30,6 @@ Params ReconstructParams::fieldParams(double r) const
     p.smoothingLength = field.smoothingLength * r;
     p.bandWidth = field.bandWidth * r;
     return p;
-}
-
-const char* isolatedModeName(IsolatedMode m)
-{
-    return m == IsolatedMode::Drop ? "drop" : "spheres";
-}
-
-IsolatedMode isolatedModeFromName(const std::string& name)
-{
-    if (name == "drop") return IsolatedMode::Drop;
-    if (name == "spheres") return IsolatedMode::Spheres;
-    throw ValueError("unknown isolated-particle mode '" + name + "' (drop, spheres)");
 }
 
 namespace {
@@ -115,12 +102,7 @@ RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute
 ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructParams& params,
                               Context& ctx, const std::string& sourceName)
 {
-    if (params.post.subdivide < 0 || params.post.subdivide > 3)
-        throw ValueError("subdivision steps " + std::to_string(params.post.subdivide) +
-                         " (0 to 3: each multiplies the triangles by 4)");
-    if (!(params.post.sphereDeviation > 0 && params.post.sphereDeviation <= 0.5))
-        throw ValueError("sphere deviation " + std::to_string(params.post.sphereDeviation) +
-                         " (a fraction of r in (0, 0.5])");
+    validate(params.post);
     ReconstructResult res;
     res.radius = chooseRadius(particles, params.radius, params.field.perParticleRadii);
     RasterizeResult field =
@@ -132,11 +114,7 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
     res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing);
     ctx.throwIfCancelled();
     const auto post = ctx.scope("post"); // always there: timing trees keep one shape
-    for (int step = 0; step < params.post.subdivide; ++step) {
-        const auto t = ctx.scope("subdivide");
-        res.mesh = post::loopSubdivide(res.mesh);
-        ctx.throwIfCancelled();
-    }
+    res.mesh = postProcessMesh(std::move(res.mesh), params.post, ctx);
     if (params.post.isolated == IsolatedMode::Spheres && !res.isolatedParticles.empty()) {
         const auto t = ctx.scope("isolated spheres");
         res.isolatedSpheres = appendIsolatedSpheres(res.mesh, particles, res.isolatedParticles,
