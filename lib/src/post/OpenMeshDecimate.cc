@@ -1,0 +1,72 @@
+// OpenMeshDecimate.cc - OpenMesh's quadric decimater on our mesh arrays (see OpenMeshDecimate.h).
+#include "post/OpenMeshDecimate.h"
+
+#include "post/Normals.h"
+
+#include <fluidsurf/Error.h>
+
+// OpenMesh 9's property containers trip GCC 12's -Wmaybe-uninitialized inside their own
+// templates (a default-constructed property value); nothing of ours is involved
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
+#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+#pragma GCC diagnostic pop
+
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+namespace post {
+
+namespace {
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+} // namespace
+
+TriangleMesh decimateOpenMesh(const TriangleMesh& in, size_t targetTriangles)
+{
+    OmMesh m;
+    std::vector<OmMesh::VertexHandle> handles;
+    handles.reserve(in.points.size());
+    for (const Vec3f& p : in.points)
+        handles.push_back(m.add_vertex(OmMesh::Point(p.x, p.y, p.z)));
+    for (size_t t = 0; t < in.triangles.size(); ++t) {
+        const auto& [a, b, c] = in.triangles[t];
+        if (!m.add_face(handles[a], handles[b], handles[c]).is_valid())
+            throw ValueError("OpenMesh cannot take triangle " + std::to_string(t) +
+                             " (a non-manifold edge or vertex); decimate a manifold mesh");
+    }
+    m.request_face_normals();
+    m.update_face_normals();
+    OpenMesh::Decimater::DecimaterT<OmMesh> decimater(m);
+    OpenMesh::Decimater::ModQuadricT<OmMesh>::Handle quadric;
+    OpenMesh::Decimater::ModNormalFlippingT<OmMesh>::Handle flipping;
+    decimater.add(quadric);
+    decimater.add(flipping);
+    decimater.module(quadric).unset_max_err();
+    decimater.initialize();
+    decimater.decimate_to_faces(0, targetTriangles);
+    m.garbage_collection();
+
+    TriangleMesh out;
+    out.points.reserve(m.n_vertices());
+    for (const auto& v : m.vertices()) {
+        const OmMesh::Point& p = m.point(v);
+        out.points.emplace_back(p[0], p[1], p[2]);
+    }
+    out.triangles.reserve(m.n_faces());
+    for (const auto& f : m.faces()) {
+        std::array<uint32_t, 3> t{};
+        int k = 0;
+        for (const auto& v : m.fv_range(f))
+            t[k++] = uint32_t(v.idx());
+        out.triangles.push_back(t);
+    }
+    computeAngleWeightedNormals(out);
+    return out;
+}
+
+} // namespace post
+} // namespace fluidsurf
