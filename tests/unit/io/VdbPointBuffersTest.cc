@@ -76,11 +76,12 @@ PointScene pointScene(size_t n, float extent)
     pts::appendAttribute<Vec3f, pts::UnitVecCodec>(tree, "N");
     pts::populateAttribute(tree, indexTree, "N", pts::PointAttributeVector<Vec3f>(normal));
     pts::appendAttribute<float>(tree, "pscale", 0.5f); // never set: a uniform array per leaf
+    // transient (kept in memory, never written) between written ones, and again at the end
+    pts::appendAttribute<float>(tree, "early", 1.0f, 1, true, nullptr, false, true);
     pts::appendAttribute<float>(tree, "four", 0.0f, 4);
     pts::populateAttribute(tree, indexTree, "four", pts::PointAttributeVector<float>(four, 4), 4);
     pts::appendGroup(tree, "splash");
     pts::setGroup(tree, indexTree, splash, "splash");
-    // transient: kept in memory, never written
     pts::appendAttribute<float>(tree, "scratch", 1.0f, 1, true, nullptr, false, true);
     s.clusterPoints = n / 2;
     return s;
