@@ -235,6 +235,8 @@ std::vector<std::pair<std::string, double>> meshCounts(const MeshReport& r)
             {"boundary_edges", double(r.boundaryEdges)},
             {"non_manifold_edges", double(r.nonManifoldEdges)},
             {"components", double(r.components)},
+            {"thin_triangles", double(r.thinTriangles)},
+            {"min_angle_deg", r.minAngleDegrees},
             {"volume", r.volume},
             {"area", r.area}};
 }

@@ -9,6 +9,10 @@
 
 namespace fluidsurf {
 
+/// Triangles with an angle under this many degrees are counted as thin (slivers): what
+/// post-processing should make fewer (thesis ch. 5, issue 13's acceptance).
+constexpr double kThinAngleDegrees = 10;
+
 struct MeshReport
 {
     size_t vertices = 0, triangles = 0;
@@ -19,6 +23,8 @@ struct MeshReport
     size_t misorientedEdges = 0;    ///< two-triangle edges walked in the same direction by both
     size_t degenerateTriangles = 0; ///< repeated vertex index or zero area
     size_t components = 0;          ///< connected components (through shared vertices)
+    size_t thinTriangles = 0;       ///< non-degenerate, with an angle under kThinAngleDegrees
+    double minAngleDegrees = 0;     ///< the smallest angle of a non-degenerate triangle
     double volume = 0;              ///< enclosed volume (signed: > 0 when oriented outward)
     double area = 0;
 

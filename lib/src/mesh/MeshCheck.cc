@@ -71,8 +71,20 @@ MeshReport checkMesh(const TriangleMesh& mesh)
         const double wx = double(c.x) - b.x, wy = double(c.y) - b.y, wz = double(c.z) - b.z;
         const double longest = std::max({ux * ux + uy * uy + uz * uz, vx * vx + vy * vy + vz * vz,
                                          wx * wx + wy * wy + wz * wz});
-        if (!(twiceArea > 1e-10 * longest) && t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        const bool distinct = t[0] != t[1] && t[1] != t[2] && t[0] != t[2];
+        if (!(twiceArea > 1e-10 * longest) && distinct)
             ++r.degenerateTriangles;
+        else if (distinct) {
+            // the smallest angle faces the shortest side: its sine is twice the area over the
+            // product of the two sides that meet there
+            const double ab = std::sqrt(ux * ux + uy * uy + uz * uz),
+                         ac = std::sqrt(vx * vx + vy * vy + vz * vz),
+                         bc = std::sqrt(wx * wx + wy * wy + wz * wz);
+            const double around = ab <= ac && ab <= bc ? ac * bc : ac <= bc ? ab * bc : ab * ac;
+            const double angle = std::asin(std::min(1.0, twiceArea / around)) * 180 / M_PI;
+            if (angle < kThinAngleDegrees) ++r.thinTriangles;
+            if (r.minAngleDegrees == 0 || angle < r.minAngleDegrees) r.minAngleDegrees = angle;
+        }
         r.area += 0.5 * twiceArea;
         r.volume += (double(a.x) * cx + double(a.y) * cy + double(a.z) * cz) / 6; // a . (u x v) / 6
         for (int k = 0; k < 3; ++k) {
@@ -140,6 +152,8 @@ std::string describe(const MeshReport& r)
           << r.misorientedEdges << " misoriented edges, " << r.degenerateTriangles
           << " degenerate triangles";
     if (r.unusedVertices) s << ", " << r.unusedVertices << " unused vertices";
+    s << "; " << r.thinTriangles << " under " << kThinAngleDegrees << " deg (smallest "
+      << r.minAngleDegrees << ")";
     return s.str();
 }
 

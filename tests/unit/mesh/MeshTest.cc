@@ -39,6 +39,25 @@ TEST(MeshCheck, ClosedTetrahedron)
     EXPECT_EQ(r.components, 1u);
     EXPECT_NEAR(r.volume, 1.0 / 6, 1e-12);
     EXPECT_NEAR(r.area, 1.5 + std::sqrt(3.0) / 2, 1e-6);
+    EXPECT_NEAR(r.minAngleDegrees, 45, 1e-4); // three right isosceles faces, one equilateral
+    EXPECT_EQ(r.thinTriangles, 0u);
+}
+
+TEST(MeshCheck, ThinTrianglesAreCountedByTheirSmallestAngle)
+{
+    // right triangles with a 5, 9.9, 10.1 and 30 degree corner; the smallest is not at index 0
+    TriangleMesh m;
+    for (double deg : {5.0, 9.9, 10.1, 30.0}) {
+        const uint32_t i = uint32_t(m.points.size());
+        m.points.push_back({0, float(std::tan(deg * M_PI / 180)), 0});
+        m.points.push_back({0, 0, 0});
+        m.points.push_back({1, 0, 0});
+        m.triangles.push_back({i, i + 1, i + 2});
+    }
+    const MeshReport r = checkMesh(m);
+    EXPECT_EQ(r.thinTriangles, 2u);
+    EXPECT_NEAR(r.minAngleDegrees, 5, 1e-4);
+    EXPECT_NE(describe(r).find("2 under 10 deg"), std::string::npos) << describe(r);
 }
 
 TEST(MeshCheck, FindsEachKindOfDefect)
