@@ -186,6 +186,9 @@ expect_error "post: a cut OBJ is one error, no output" "cut_mesh.obj" "$BIN" pos
 check "post: nothing written for the cut OBJ" test ! -e "$T/cut_post.obj"
 check "post --help has examples" bash -c "'$BIN' post --help | grep -q 'fluidsurf post frame.obj'"
 check "reconstruct: isolated droplets meshed as spheres by default, one closed component each" bash -c "[ '${n:-0}' -gt 0 ] && [ '$c1' -eq \$(( ${c0:-0} + ${n:-0} )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_s.obj' >/dev/null"
+"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_s5.obj" -q --sphere-deviation 0.05
+t3=$("$BIN" info "$T/drop_s5.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
+check "reconstruct --sphere-deviation 0.05: 320 triangles a sphere (level 2)" bash -c "[ '${t3:-0}' -eq \$(( ${t0:-0} + 320 * ${n:-0} )) ]"
 check "mesh --check says watertight" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop3.ply' --check | grep -q watertight"
 check "mesh --mesher openvdb" bash -c "'$BIN' mesh '$T/drop_ls.vdb' --mesher openvdb -o '$T/dropv.obj' -q && /usr/bin/python3 '$T/objcheck.py' '$T/dropv.obj' >/dev/null"
 check "mesh to .vtk" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop.vtk' -q && head -c 30 '$T/drop.vtk' | grep -q vtk"

@@ -215,6 +215,11 @@ Runner addReconstructCommand(CLI::App& app)
                     "drop (left out of the mesh)")
         ->capture_default_str()
         ->check(CLI::IsMember({"spheres", "drop"}));
+    cmd->add_option("--sphere-deviation", o->pipeline.params.post.sphereDeviation,
+                    "how far the spheres' faces may dip inside their radius, as a fraction of it; "
+                    "picks the icosphere level (0.01: 1,280 triangles, 0.05: 320)")
+        ->capture_default_str()
+        ->check(CLI::Range(1e-6, 0.5));
     cmd->add_option("--subdivide", o->pipeline.params.post.subdivide,
                     "Loop subdivision steps on the surface (each 4x the triangles; normals then "
                     "angle-weighted); 0 to 3")
