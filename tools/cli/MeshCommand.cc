@@ -16,6 +16,7 @@
 #include <fluidsurf/io/ParticleIO.h>
 
 #include <cstdio>
+#include <functional>
 #include <memory>
 
 namespace fluidsurf {
@@ -82,6 +83,46 @@ void writeAndReport(const MeshOptions& o, Context& ctx, const TriangleMesh& mesh
     if (po.check) std::printf("  mesh: %s\n", describe(check).c_str());
 }
 
+/// One frame's mesh from its input file, with counts for its report.
+using MakeMesh = std::function<TriangleMesh(const std::string& input, Context& ctx,
+                                            std::vector<std::pair<std::string, double>>& counts)>;
+
+/// The frame loop of a command that turns each input file into one mesh (mesh, post): plan,
+/// refuse to overwrite an input, then per frame make, write and report, with a progress bar.
+int runMeshFrames(const MeshOptions& o, const char* name, const MakeMesh& make)
+{
+    const PipelineOptions& po = o.pipeline;
+    const auto jobs = planMeshJobs(o);
+    refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
+    Context ctx;
+    const auto threadLimit = po.setUp(ctx);
+    Progress bar(jobs.size(), name, po.quiet);
+    Report report(po);
+    for (size_t i = 0; i < jobs.size(); ++i)
+        forFile(jobs[i].input, [&] {
+            bar.update(i, jobs[i].input);
+            ctx.timing().clear();
+            std::vector<std::pair<std::string, double>> counts;
+            const TriangleMesh mesh = make(jobs[i].input, ctx, counts);
+            io::OutputGroup outputs;
+            writeAndReport(o, ctx, mesh, jobs[i], bar.enabled(), report, outputs, counts);
+            stopIfInterrupted(ctx);
+        });
+    bar.finish();
+    report.finish();
+    return 0;
+}
+
+/// --subdivide, for the commands that post-process a mesh.
+void addSubdivideOption(CLI::App* cmd, PostProcessParams& p)
+{
+    cmd->add_option("--subdivide", p.subdivide,
+                    "Loop subdivision steps (each 4x the triangles; normals then "
+                    "angle-weighted); 0 to 3")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 3));
+}
+
 } // namespace
 
 Runner addMeshCommand(CLI::App& app)
@@ -100,34 +141,19 @@ Runner addMeshCommand(CLI::App& app)
         "Reads any VDB level set (ours or another tool's); meshes its zero crossing with\n"
         "outward (counter-clockwise) triangles and vertex normals from the field gradient.");
     return [o]() {
-        const PipelineOptions& po = o->pipeline;
-        const auto jobs = planMeshJobs(*o);
-        refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
-        const Mesher mesher = mesherFromName(po.mesher);
-        Context ctx;
-        const auto threadLimit = po.setUp(ctx);
-        Progress bar(jobs.size(), "mesh", po.quiet);
-        Report report(po);
-        for (size_t i = 0; i < jobs.size(); ++i)
-            forFile(jobs[i].input, [&] {
-                bar.update(i, jobs[i].input);
-                ctx.timing().clear();
-                openvdb::FloatGrid::Ptr grid;
-                {
-                    const auto t = ctx.scope("read");
-                    grid = io::readLevelSet(jobs[i].input, o->grid);
-                }
-                stopIfInterrupted(ctx);
-                MeshStats ms;
-                const TriangleMesh mesh = meshLevelSet(*grid, mesher, ctx, &ms);
-                io::OutputGroup outputs;
-                writeAndReport(*o, ctx, mesh, jobs[i], bar.enabled(), report, outputs,
-                               {{"surface_cells", double(ms.surfaceCells)}});
-                stopIfInterrupted(ctx);
-            });
-        bar.finish();
-        report.finish();
-        return 0;
+        const Mesher mesher = mesherFromName(o->pipeline.mesher);
+        return runMeshFrames(*o, "mesh", [&](const std::string& input, Context& ctx, auto& counts) {
+            openvdb::FloatGrid::Ptr grid;
+            {
+                const auto t = ctx.scope("read");
+                grid = io::readLevelSet(input, o->grid);
+            }
+            stopIfInterrupted(ctx);
+            MeshStats ms;
+            TriangleMesh mesh = meshLevelSet(*grid, mesher, ctx, &ms);
+            counts.push_back({"surface_cells", double(ms.surfaceCells)});
+            return mesh;
+        });
     };
 }
 
@@ -151,11 +177,7 @@ Runner addPostCommand(CLI::App& app)
         "post", "Post-process triangle mesh(es): Loop subdivision (decimation to come)");
     cmd->add_option("input", o->input, "mesh file (.obj or .ply) or frame pattern")->required();
     addMeshOutputOptions(cmd, *o, Makes::Mesh);
-    cmd->add_option("--subdivide", o->pipeline.params.post.subdivide,
-                    "Loop subdivision steps (each 4x the triangles; normals then "
-                    "angle-weighted); 0 to 3")
-        ->capture_default_str()
-        ->check(CLI::Range(0, 3));
+    addSubdivideOption(cmd, o->pipeline.params.post);
     cmd->footer("Examples:\n"
                 "  fluidsurf post frame.obj -o frame_smooth.obj\n"
                 "  fluidsurf post 'obj/f_{:04}.obj' -o 'smooth/f_{:04}.ply' --frames 1-100\n"
@@ -163,38 +185,20 @@ Runner addPostCommand(CLI::App& app)
                 "broken file is one error and no output. Borders and non-manifold edges are\n"
                 "kept as creases; a closed, oriented mesh stays so.");
     return [o]() {
-        const PipelineOptions& po = o->pipeline;
-        const auto jobs = planMeshJobs(*o);
-        refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
-        Context ctx;
-        const auto threadLimit = po.setUp(ctx);
-        Progress bar(jobs.size(), "post", po.quiet);
-        Report report(po);
-        for (size_t i = 0; i < jobs.size(); ++i)
-            forFile(jobs[i].input, [&] {
-                bar.update(i, jobs[i].input);
-                ctx.timing().clear();
-                TriangleMesh mesh;
-                {
-                    const auto t = ctx.scope("read");
-                    mesh = io::readMesh(jobs[i].input);
-                }
-                if (mesh.triangles.empty())
-                    throw InputError(jobs[i].input + ": no triangles to post-process (" +
-                                     std::to_string(mesh.points.size()) +
-                                     " vertices: a point cloud, or a file cut short?)");
-                stopIfInterrupted(ctx);
-                {
-                    const auto t = ctx.scope("post");
-                    mesh = postProcessMesh(std::move(mesh), po.params.post, ctx);
-                }
-                io::OutputGroup outputs;
-                writeAndReport(*o, ctx, mesh, jobs[i], bar.enabled(), report, outputs, {});
-                stopIfInterrupted(ctx);
-            });
-        bar.finish();
-        report.finish();
-        return 0;
+        return runMeshFrames(*o, "post", [&](const std::string& input, Context& ctx, auto&) {
+            TriangleMesh mesh;
+            {
+                const auto t = ctx.scope("read");
+                mesh = io::readMesh(input);
+            }
+            if (mesh.triangles.empty())
+                throw InputError(input + ": no triangles to post-process (" +
+                                 std::to_string(mesh.points.size()) +
+                                 " vertices: a point cloud, or a file cut short?)");
+            stopIfInterrupted(ctx);
+            const auto t = ctx.scope("post");
+            return postProcessMesh(std::move(mesh), o->pipeline.params.post, ctx);
+        });
     };
 }
 
@@ -220,11 +224,7 @@ Runner addReconstructCommand(CLI::App& app)
                     "picks the icosphere level (0.01: 1,280 triangles, 0.05: 320)")
         ->capture_default_str()
         ->check(CLI::Range(1e-6, 0.5));
-    cmd->add_option("--subdivide", o->pipeline.params.post.subdivide,
-                    "Loop subdivision steps on the surface (each 4x the triangles; normals then "
-                    "angle-weighted); 0 to 3")
-        ->capture_default_str()
-        ->check(CLI::Range(0, 3));
+    addSubdivideOption(cmd, o->pipeline.params.post);
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"

@@ -42,8 +42,8 @@ size_t appendIsolatedSpheres(TriangleMesh& mesh, const ParticleSet& ps,
                              const std::vector<uint32_t>& isolated, const ReconstructParams& params,
                              double r)
 {
+    // the field's radii: rasterizeParticles has checked them (one positive value each)
     const Attribute* a = params.field.perParticleRadii ? ps.find(AttributeRole::Radius) : nullptr;
-    if (a && a->floats.size() != ps.positions.size()) a = nullptr; // as particleRadii does
     std::vector<Vec3f> centres;
     std::vector<float> radii;
     for (uint32_t i : isolated) {

@@ -8,6 +8,8 @@
 
 #include <fluidsurf/Error.h>
 
+#include <openvdb/Types.h>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -21,15 +23,15 @@ namespace post {
 
 namespace {
 
-using Vec3d = std::array<double, 3>;
+using openvdb::Vec3d;
 
-Vec3d unit(const Vec3d& v)
+Vec3d unit(Vec3d v)
 {
-    const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    return {v[0] / n, v[1] / n, v[2] / n};
+    v.normalize();
+    return v;
 }
 
-Vec3d toDouble(const Vec3f& v)
+Vec3d toVec3d(const Vec3f& v)
 {
     return {v.x, v.y, v.z};
 }
@@ -61,7 +63,7 @@ TriangleMesh unitIcosphere(int level)
             const auto key = std::minmax(a, b);
             const auto found = middle.find(key);
             if (found != middle.end()) return found->second;
-            p.push_back(unit({p[a][0] + p[b][0], p[a][1] + p[b][1], p[a][2] + p[b][2]}));
+            p.push_back(unit(p[a] + p[b]));
             return middle[key] = uint32_t(p.size() - 1);
         };
         std::vector<std::array<uint32_t, 3>> finer;
@@ -87,13 +89,10 @@ double icosphereDeviation(const TriangleMesh& unitSphere)
 {
     double nearest = 1.0;
     for (const auto& [a, b, c] : unitSphere.triangles) {
-        const Vec3d pa = toDouble(unitSphere.points[a]), pb = toDouble(unitSphere.points[b]),
-                    pc = toDouble(unitSphere.points[c]);
-        const Vec3d u{pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]},
-            v{pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]};
+        const Vec3d pa = toVec3d(unitSphere.points[a]);
         const Vec3d n =
-            unit({u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]});
-        nearest = std::min(nearest, std::abs(n[0] * pa[0] + n[1] * pa[1] + n[2] * pa[2]));
+            unit((toVec3d(unitSphere.points[b]) - pa).cross(toVec3d(unitSphere.points[c]) - pa));
+        nearest = std::min(nearest, std::abs(n.dot(pa)));
     }
     return 1.0 - nearest;
 }

@@ -8,6 +8,8 @@
 
 #include "post/Normals.h"
 
+#include <openvdb/Types.h>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -29,12 +31,15 @@ struct Side
     }
 };
 
-struct P3
+openvdb::Vec3d toVec3d(const Vec3f& p)
 {
-    double x = 0, y = 0, z = 0;
-    void add(const Vec3f& p, double w) { x += w * p.x, y += w * p.y, z += w * p.z; }
-    Vec3f f() const { return Vec3f(float(x), float(y), float(z)); }
-};
+    return {p.x, p.y, p.z};
+}
+
+Vec3f toVec3f(const openvdb::Vec3d& p)
+{
+    return {float(p[0]), float(p[1]), float(p[2])};
+}
 
 /// Loop's weight of each of n neighbours of a smooth point.
 double beta(size_t n)
@@ -87,43 +92,37 @@ TriangleMesh loopSubdivide(const TriangleMesh& in)
     out.points.resize(nv + ne);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
-            const Vec3f& p = in.points[v];
+            const openvdb::Vec3d p = toVec3d(in.points[v]);
             const size_t n = start[v + 1] - start[v];
             size_t creases = 0;
-            P3 around, along;
+            openvdb::Vec3d around(0.0), along(0.0);
             for (uint32_t i = start[v]; i < start[v + 1]; ++i) {
                 const size_t e = incident[i];
                 const Side& s = sides[first[e]];
-                const Vec3f& q = in.points[s.lo == v ? s.hi : s.lo];
-                around.add(q, 1);
-                if (crease(e)) ++creases, along.add(q, 1);
+                const openvdb::Vec3d q = toVec3d(in.points[s.lo == v ? s.hi : s.lo]);
+                around += q;
+                if (crease(e)) ++creases, along += q;
             }
-            P3 moved;
-            if (n == 0 || creases > 2 || creases == 1) {
-                moved.add(p, 1); // unused, a corner of creases, or the end of one: stays
-            } else if (creases == 2) {
-                moved.add(p, 0.75), moved.x += along.x / 8, moved.y += along.y / 8,
-                    moved.z += along.z / 8;
-            } else {
-                const double b = beta(n);
-                moved.add(p, 1 - double(n) * b);
-                moved.x += b * around.x, moved.y += b * around.y, moved.z += b * around.z;
-            }
-            out.points[v] = moved.f();
+            if (n == 0 || creases > 2 || creases == 1)
+                out.points[v] = in.points[v]; // unused, a corner of creases, or the end of one
+            else if (creases == 2)
+                out.points[v] = toVec3f(p * 0.75 + along / 8);
+            else
+                out.points[v] = toVec3f(p * (1 - double(n) * beta(n)) + around * beta(n));
         }
     });
     tbb::parallel_for(tbb::blocked_range<size_t>(0, ne), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t e = r.begin(); e != r.end(); ++e) {
             const Side& s = sides[first[e]];
-            P3 q;
+            const openvdb::Vec3d ends = toVec3d(in.points[s.lo]) + toVec3d(in.points[s.hi]);
             if (crease(e)) {
-                q.add(in.points[s.lo], 0.5), q.add(in.points[s.hi], 0.5);
-            } else {
-                q.add(in.points[s.lo], 3.0 / 8), q.add(in.points[s.hi], 3.0 / 8);
-                for (uint32_t i = first[e]; i < first[e + 1]; ++i) // the two opposite corners
-                    q.add(in.points[in.triangles[sides[i].tri][(sides[i].k + 2) % 3]], 1.0 / 8);
+                out.points[nv + e] = toVec3f(ends * 0.5);
+                continue;
             }
-            out.points[nv + e] = q.f();
+            openvdb::Vec3d opposite(0.0); // the two corners facing the edge
+            for (uint32_t i = first[e]; i < first[e + 1]; ++i)
+                opposite += toVec3d(in.points[in.triangles[sides[i].tri][(sides[i].k + 2) % 3]]);
+            out.points[nv + e] = toVec3f(ends * (3.0 / 8) + opposite / 8);
         }
     });
     out.triangles.resize(4 * nt);

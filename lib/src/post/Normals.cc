@@ -5,6 +5,8 @@
 // same order on every run.
 #include "post/Normals.h"
 
+#include <openvdb/Types.h>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -15,29 +17,9 @@ namespace post {
 
 namespace {
 
-struct V3
+openvdb::Vec3d toVec3d(const Vec3f& p)
 {
-    double x, y, z;
-};
-
-V3 sub(const Vec3f& a, const Vec3f& b)
-{
-    return {double(a.x) - b.x, double(a.y) - b.y, double(a.z) - b.z};
-}
-
-double dot(const V3& a, const V3& b)
-{
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-
-V3 cross(const V3& a, const V3& b)
-{
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-
-double norm(const V3& a)
-{
-    return std::sqrt(dot(a, a));
+    return {p.x, p.y, p.z};
 }
 
 } // namespace
@@ -59,22 +41,22 @@ void computeAngleWeightedNormals(TriangleMesh& mesh)
     mesh.normals.assign(nv, Vec3f(0, 0, 0));
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
-            V3 sum{0, 0, 0};
+            const openvdb::Vec3d p = toVec3d(mesh.points[v]);
+            openvdb::Vec3d sum(0.0);
             for (uint32_t i = start[v]; i < start[v + 1]; ++i) {
                 const auto& t = mesh.triangles[corner[i]];
                 const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-                const Vec3f& p = mesh.points[v];
-                const V3 a = sub(mesh.points[t[(k + 1) % 3]], p),
-                         b = sub(mesh.points[t[(k + 2) % 3]], p);
-                const V3 n = cross(a, b);
-                const double len = norm(n);
+                const openvdb::Vec3d a = toVec3d(mesh.points[t[(k + 1) % 3]]) - p,
+                                     b = toVec3d(mesh.points[t[(k + 2) % 3]]) - p;
+                const openvdb::Vec3d n = a.cross(b);
+                const double len = n.length();
                 if (len == 0) continue; // a degenerate triangle has no direction
-                const double angle = std::atan2(len, dot(a, b));
-                sum.x += angle * n.x / len, sum.y += angle * n.y / len, sum.z += angle * n.z / len;
+                sum += n * (std::atan2(len, a.dot(b)) / len);
             }
-            const double len = norm(sum);
+            const double len = sum.length();
             if (len > 0)
-                mesh.normals[v] = Vec3f(float(sum.x / len), float(sum.y / len), float(sum.z / len));
+                mesh.normals[v] =
+                    Vec3f(float(sum[0] / len), float(sum[1] / len), float(sum[2] / len));
         }
     });
 }
