@@ -166,7 +166,7 @@ print(v, faces)
 PY
 check "mesh --help" bash -c "'$BIN' mesh --help | grep -q -- '--mesher'"
 check "reconstruct --help" bash -c "'$BIN' reconstruct --help | grep -q -- '--influence'"
-check "reconstruct a generated drop" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop.obj" --vdb "$T/drop_ls.vdb" -q --isolated drop
+check "reconstruct a generated drop (raw mesh)" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop.obj" --vdb "$T/drop_ls.vdb" -q --isolated drop --decimate off --subdivide 0
 check "reconstruct: OBJ closed and oriented (independent check)" bash -c "/usr/bin/python3 '$T/objcheck.py' '$T/drop.obj' >/dev/null"
 check "reconstruct --vdb wrote the level set" bash -c "vdb_print '$T/drop_ls.vdb' | grep -q surface"
 check "mesh of that .vdb = reconstruct's mesh" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop2.obj' -q && cmp -s '$T/drop.obj' '$T/drop2.obj'"
@@ -175,18 +175,31 @@ n=$(grep -Eo '[0-9]+ isolated particles meshed as spheres' <<<"$out" | grep -Eo 
 c0=$("$BIN" info "$T/drop.obj" | grep -Eo '[0-9]+ components' | grep -Eo '[0-9]+')
 c1=$("$BIN" info "$T/drop_s.obj" | grep -Eo '[0-9]+ components' | grep -Eo '[0-9]+')
 t0=$("$BIN" info "$T/drop.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
-"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_sub.obj" -q --isolated drop --subdivide 1
+"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_sub.obj" -q --isolated drop
 t1=$("$BIN" info "$T/drop_sub.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
-check "reconstruct --subdivide 1: four times the triangles, still closed and oriented" bash -c "[ '${t1:-0}' -eq \$(( 4 * ${t0:-1} )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_sub.obj' >/dev/null"
+# the defaults: 80% decimated (to ceil(t0 / 5) triangles or one collapse's two fewer), then one
+# Loop step (4x): fewer triangles than the raw mesh
+keep=$(( (${t0:-0} + 4) / 5 ))
+check "reconstruct: decimated to a fifth, then subdivided once by default, still closed and oriented" bash -c "[ '${t1:-0}' -le \$(( 4 * $keep )) ] && [ '${t1:-0}' -ge \$(( 4 * ($keep - 1) )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_sub.obj' >/dev/null"
 "$BIN" post "$T/drop.obj" -o "$T/drop_post.obj" -q
 t2=$("$BIN" info "$T/drop_post.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
-check "post: one Loop step by default, the same mesh as reconstruct --subdivide 1" bash -c "[ '${t2:-0}' -eq '${t1:-1}' ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_post.obj' >/dev/null"
+check "post: the same steps as reconstruct by default" bash -c "[ '${t2:-0}' -le \$(( 4 * $keep )) ] && [ '${t2:-0}' -ge \$(( 4 * ($keep - 1) )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_post.obj' >/dev/null"
+"$BIN" post "$T/drop.obj" -o "$T/drop_om.obj" -q --decimator openmesh --subdivide 0
+t4=$("$BIN" info "$T/drop_om.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
+check "post --decimator openmesh: the same target, closed and oriented" bash -c "[ '${t4:-0}' -le $keep ] && [ '${t4:-0}' -ge \$(( $keep - 2 )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_om.obj' >/dev/null"
+"$BIN" post "$T/drop.obj" -o "$T/drop_e.obj" -q --decimate off --decimate-error 0.1 --voxel-size 0.01 --subdivide 0
+t5=$("$BIN" info "$T/drop_e.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
+check "post --decimate-error 0.1 alone: fewer triangles, closed and oriented" bash -c "[ '${t5:-0}' -gt 0 ] && [ '${t5:-0}' -lt '${t0:-0}' ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_e.obj' >/dev/null"
+expect_error "reconstruct --decimate must be a fraction or off" "a fraction of the triangles to remove" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --decimate most
+expect_error "reconstruct --decimate 1 removes everything: refused" "decimation fraction" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --decimate 1
+expect_error "openmesh takes no error bound" "takes no error bound" "$BIN" post "$T/drop.obj" -o "$T/bad.obj" --decimator openmesh --decimate-error 0.5
+check "nothing written for refused options" test ! -e "$T/bad.obj"
 head -c 3000 "$T/drop.obj" >"$T/cut_mesh.obj"
 expect_error "post: a cut OBJ is one error, no output" "cut_mesh.obj" "$BIN" post "$T/cut_mesh.obj" -o "$T/cut_post.obj"
 check "post: nothing written for the cut OBJ" test ! -e "$T/cut_post.obj"
 check "post --help has examples" bash -c "'$BIN' post --help | grep -q 'fluidsurf post frame.obj'"
 check "reconstruct: isolated droplets meshed as spheres by default, one closed component each" bash -c "[ '${n:-0}' -gt 0 ] && [ '$c1' -eq \$(( ${c0:-0} + ${n:-0} )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_s.obj' >/dev/null"
-"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_s5.obj" -q --sphere-deviation 0.05
+"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_s5.obj" -q --sphere-deviation 0.05 --decimate off --subdivide 0
 t3=$("$BIN" info "$T/drop_s5.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
 check "reconstruct --sphere-deviation 0.05: 320 triangles a sphere (level 2)" bash -c "[ '${t3:-0}' -eq \$(( ${t0:-0} + 320 * ${n:-0} )) ]"
 check "mesh --check says watertight" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop3.ply' --check | grep -q watertight"

@@ -55,8 +55,10 @@ for ext in ("vdb", "bgeo.gz", "ply", "xyz", "vtk"):
     run(["convert", "-q", S("frame.bgeo"), S("frame." + ext)])
 run(["convert", "-q", S("frame.bgeo"), S("plain.bgeo")])  # the real .bgeo is gzip'd
 run(["rasterize", "-q", S("frame.bgeo"), "-r", R, "-o", S("surface.vdb")])
-run(["reconstruct", "-q", S("frame.bgeo"), "-r", R, "-o", S("mesh.obj")])
-run(["reconstruct", "-q", S("frame.bgeo"), "-r", R, "-o", S("mesh.ply")])
+# raw marching-cubes meshes (the cut fractions below are placed for their layout)
+RAW = ["--decimate", "off", "--subdivide", "0"]
+run(["reconstruct", "-q", S("frame.bgeo"), "-r", R, "-o", S("mesh.obj")] + RAW)
+run(["reconstruct", "-q", S("frame.bgeo"), "-r", R, "-o", S("mesh.ply")] + RAW)
 xyz = read(S("frame.xyz"))
 points = [struct.unpack_from("<3f", xyz, 12 * i) for i in range(len(xyz) // 12)]
 with open(S("frame.csv"), "w") as f:

@@ -46,6 +46,18 @@ struct MeshBenchOptions
 
 int runMeshBench(const MeshBenchOptions& options);
 
+struct PostBenchOptions
+{
+    std::string scenes = "real,large,drop-1M";
+    double decimate = 0.8;    ///< the share of triangles removed
+    double decimateError = 0; ///< and the error bound, in voxels (0: none)
+    int repeat = 3;
+    int openMeshRepeat = 1; ///< runs of OpenMesh's serial Decimater (0: none)
+    std::string shared = "../shared/data";
+};
+
+int runPostBench(const PostBenchOptions& options);
+
 /// A benchmark scene: a real frame (with its file, for whole-process rows) or a generated one.
 struct Case
 {

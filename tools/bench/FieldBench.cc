@@ -52,6 +52,19 @@ std::vector<Case> loadCases(const std::string& scenes, const std::string& shared
             }
             continue;
         }
+        if (name == "large") { // the DualSPHysics frames, r as ../shared/data/README.md gives it
+            const std::pair<const char*, double> files[] = {
+                {"dam_obstacle_t0.20_1704086_particles.xyz", 0.0018},
+                {"dam_obstacle_t0.50_1694136_particles.xyz", 0.0018},
+                {"dam_obstacle_t0.50_398850_particles.vtk", 0.0029}};
+            for (const auto& [f, r] : files) {
+                const std::string path = shared + "/large/" + f;
+                if (!std::ifstream(path)) continue;
+                cases.push_back({std::string(f).substr(0, std::string(f).find("_particles")),
+                                 io::readParticles(path), r, path});
+            }
+            continue;
+        }
         if (name.rfind("hilbert", 0) == 0) {
             const std::string path = shared + "/real/hilbert_46843_particles.bgeo";
             cases.push_back({"hilbert_46843", io::readParticles(path), 0.025, path});

@@ -3,6 +3,7 @@
 //   fluidsurf_bench io [--count N] [--repeat K]   particle read throughput per format
 //   fluidsurf_bench field [--scenes ...]          rasterize stages vs baselines and OpenVDB
 //   fluidsurf_bench mesh [--scenes ...]           meshing stage vs volumeToMesh; whole pipeline
+//   fluidsurf_bench post [--scenes ...]           decimation and subdivision (thesis Table 5.1)
 #include "Bench.h"
 
 #include <CLI/CLI.hpp>
@@ -57,6 +58,23 @@ int main(int argc, char** argv)
     meshCmd->add_option("--shared", mesh.shared, "../shared/data")->capture_default_str();
     meshCmd->add_option("--dir", mesh.dir, "folder for the whole-pipeline OBJ")
         ->capture_default_str();
+    fluidsurf::bench::PostBenchOptions post;
+    CLI::App* postCmd = app.add_subcommand(
+        "post", "decimation and subdivision per scene (thesis Table 5.1) vs OpenMesh's Decimater");
+    postCmd
+        ->add_option("--scenes", post.scenes,
+                     "real, large, hilbert, drop-1M, ... (comma-separated)")
+        ->capture_default_str();
+    postCmd->add_option("--decimate", post.decimate, "share of the triangles removed")
+        ->capture_default_str();
+    postCmd->add_option("--decimate-error", post.decimateError, "error bound, voxels (0: none)")
+        ->capture_default_str();
+    postCmd->add_option("--repeat", post.repeat, "runs per case (median)")->capture_default_str();
+    postCmd
+        ->add_option("--openmesh-repeat", post.openMeshRepeat,
+                     "runs of OpenMesh's serial Decimater per case (0: skip it)")
+        ->capture_default_str();
+    postCmd->add_option("--shared", post.shared, "../shared/data")->capture_default_str();
     bool coldAllocator = false;
     app.add_flag(
         "--cold-allocator", coldAllocator,
@@ -73,6 +91,7 @@ int main(int argc, char** argv)
         if (app.got_subcommand("io")) return fluidsurf::bench::runReadBench(io);
         if (app.got_subcommand("field")) return fluidsurf::bench::runFieldBench(field);
         if (app.got_subcommand("mesh")) return fluidsurf::bench::runMeshBench(mesh);
+        if (app.got_subcommand("post")) return fluidsurf::bench::runPostBench(post);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "fluidsurf_bench: error: %s\n", e.what());
         return 1;

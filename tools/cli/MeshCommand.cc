@@ -113,12 +113,35 @@ int runMeshFrames(const MeshOptions& o, const char* name, const MakeMesh& make)
     return 0;
 }
 
-/// --subdivide, for the commands that post-process a mesh.
-void addSubdivideOption(CLI::App* cmd, PostProcessParams& p)
+/// --stats counts of post-processing: the triangles it took and left after decimation.
+void addPostCounts(const PostProcessStats& s, std::vector<std::pair<std::string, double>>& counts)
 {
+    counts.push_back({"raw_triangles", double(s.inputTriangles)});
+    counts.push_back({"decimated_triangles", double(s.decimatedTriangles)});
+    counts.push_back({"decimate_error_voxels", s.decimateError});
+}
+
+/// Decimation and subdivision, for the commands that post-process a mesh.
+void addPostOptions(CLI::App* cmd, PipelineOptions& o)
+{
+    PostProcessParams& p = o.params.post;
+    cmd->add_option("--decimate", o.decimate,
+                    "share of the triangles to remove by quadric error, cheapest first "
+                    "(flat bumps go first, as in the thesis), before subdividing; or off")
+        ->capture_default_str();
+    cmd->add_option("--decimate-error", p.decimateError,
+                    "also stop decimating where a collapse would move the surface by more than "
+                    "about K voxels (its quadric error over (K voxel)^2); 0 for no bound")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 1e6));
+    cmd->add_option("--decimator", o.decimator,
+                    "quadric (ours: parallel, the same result for any -j) or openmesh "
+                    "(OpenMesh's serial Decimater, the reference)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"quadric", "openmesh"}));
     cmd->add_option("--subdivide", p.subdivide,
-                    "Loop subdivision steps (each 4x the triangles; normals then "
-                    "angle-weighted); 0 to 3")
+                    "Loop subdivision steps after decimation (each 4x the triangles; rounds "
+                    "off the edges decimation leaves); 0 to 3")
         ->capture_default_str()
         ->check(CLI::Range(0, 3));
 }
@@ -172,20 +195,25 @@ std::string isolatedFate(const ReconstructParams& params, const ReconstructResul
 Runner addPostCommand(CLI::App& app)
 {
     auto o = std::make_shared<MeshOptions>();
-    o->pipeline.params.post.subdivide = 1; // a post run does a step unless told otherwise
     CLI::App* cmd = app.add_subcommand(
-        "post", "Post-process triangle mesh(es): Loop subdivision (decimation to come)");
+        "post", "Post-process triangle mesh(es): quadric decimation, then Loop subdivision");
     cmd->add_option("input", o->input, "mesh file (.obj or .ply) or frame pattern")->required();
     addMeshOutputOptions(cmd, *o, Makes::Mesh);
-    addSubdivideOption(cmd, o->pipeline.params.post);
+    addPostOptions(cmd, o->pipeline);
+    cmd->add_option("--voxel-size", o->pipeline.params.post.voxelSize,
+                    "the voxel --decimate-error counts in, world units (default: the input's "
+                    "mean edge length; give the grid's voxel to match reconstruct)")
+        ->check(CLI::PositiveNumber);
     cmd->footer("Examples:\n"
                 "  fluidsurf post frame.obj -o frame_smooth.obj\n"
+                "  fluidsurf post frame.ply -o frame_light.ply --decimate 0.9 --subdivide 0\n"
                 "  fluidsurf post 'obj/f_{:04}.obj' -o 'smooth/f_{:04}.ply' --frames 1-100\n"
                 "Reads any triangle mesh (.obj, .ply) as the readers of particle files do: a\n"
                 "broken file is one error and no output. Borders and non-manifold edges are\n"
                 "kept as creases; a closed, oriented mesh stays so.");
     return [o]() {
-        return runMeshFrames(*o, "post", [&](const std::string& input, Context& ctx, auto&) {
+        const PostProcessParams post = o->pipeline.resolved().post;
+        return runMeshFrames(*o, "post", [&](const std::string& input, Context& ctx, auto& counts) {
             TriangleMesh mesh;
             {
                 const auto t = ctx.scope("read");
@@ -197,7 +225,10 @@ Runner addPostCommand(CLI::App& app)
                                  " vertices: a point cloud, or a file cut short?)");
             stopIfInterrupted(ctx);
             const auto t = ctx.scope("post");
-            return postProcessMesh(std::move(mesh), o->pipeline.params.post, ctx);
+            PostProcessStats ps;
+            mesh = postProcessMesh(std::move(mesh), post, ctx, &ps);
+            addPostCounts(ps, counts);
+            return mesh;
         });
     };
 }
@@ -224,10 +255,11 @@ Runner addReconstructCommand(CLI::App& app)
                     "picks the icosphere level (0.01: 1,280 triangles, 0.05: 320)")
         ->capture_default_str()
         ->check(CLI::Range(1e-6, 0.5));
-    addSubdivideOption(cmd, o->pipeline.params.post);
+    addPostOptions(cmd, o->pipeline);
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
+        "  fluidsurf reconstruct frame.bgeo -r 0.025 -o raw.obj --decimate off --subdivide 0\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj --vdb frame.vdb --check\n"
         "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'obj/f_{:04}.obj' --frames 1-100\n"
         "  fluidsurf reconstruct frame.bgeo -o frame.obj -v --stats frame.json   (r estimated)\n"
@@ -268,6 +300,7 @@ Runner addReconstructCommand(CLI::App& app)
                 warnIfEmpty(jobs[i].input, ps, res.field, params.radius, res.mesh.empty());
                 std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
                 counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
+                addPostCounts(res.post, counts);
                 counts.push_back({"isolated_spheres", double(res.isolatedSpheres)});
                 writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
                                &res.field);

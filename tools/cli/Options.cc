@@ -142,6 +142,20 @@ ReconstructParams PipelineOptions::resolved() const
     p.field.perParticleRadii = !ignoreRadiusAttribute;
     p.mesh.mesher = mesherFromName(mesher);
     p.post.isolated = isolatedModeFromName(isolated);
+    p.post.decimator = decimatorFromName(decimator);
+    if (decimate == "off") {
+        p.post.decimate = 0;
+    } else {
+        size_t used = 0;
+        try {
+            p.post.decimate = std::stod(decimate, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used != decimate.size())
+            throw ValueError("--decimate " + decimate +
+                             ": a fraction of the triangles to remove (0.8) or 'off'");
+    }
     return p;
 }
 

@@ -24,13 +24,14 @@ struct PipelineOptions
 {
     ReconstructParams params; ///< params.field: lengths in r
     std::string field = "ssp07", method = "narrow-band", device = "cpu", mesher = "mc",
-                isolated = "spheres";
+                isolated = "spheres", decimate = "0.8", decimator = "quadric";
     bool ignoreRadiusAttribute = false;
     int threads = 0;
     bool quiet = false, verbose = false, check = false;
     std::string stats; ///< --stats FILE.json
 
-    /// The params after parsing (enum names, radius attribute).
+    /// The params after parsing (enum names, radius attribute, --decimate). ValueError for a
+    /// --decimate that is neither a fraction nor "off".
     ReconstructParams resolved() const;
     /// A context for these options: device, threads, and Ctrl-C as a clean stop. The returned
     /// object holds -j for the whole process while it lives (file writing included).

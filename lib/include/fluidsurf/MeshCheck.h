@@ -38,6 +38,12 @@ struct MeshReport
 
 MeshReport checkMesh(const TriangleMesh& mesh);
 
+/// The largest distance from a point of mesh a (its vertices and triangle centroids) to mesh
+/// b, each exact to b's nearest triangle; +inf when some point is farther than `reach`, the
+/// search radius (world units). One side of the Hausdorff distance: the symmetric one is the
+/// larger of meshDistance(a, b) and meshDistance(b, a). 0 for an empty a.
+double meshDistance(const TriangleMesh& a, const TriangleMesh& b, double reach);
+
 /// One line: "V vertices, T triangles, C components, volume, area, problems (or 'watertight')".
 std::string describe(const MeshReport& report);
 

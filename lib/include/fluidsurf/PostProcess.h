@@ -1,5 +1,5 @@
-// PostProcess.h - mesh post-processing (thesis chapter 5) on any closed triangle mesh: today Loop
-// subdivision (decimation to come), with angle-weighted normals after each step. reconstruct()
+// PostProcess.h - mesh post-processing (thesis chapter 5) on any triangle mesh: quadric-error
+// decimation, then Loop subdivision, with angle-weighted normals after each step. reconstruct()
 // runs it on the surface it meshed and then adds isolated particles as spheres (they need the
 // particles); `fluidsurf post` runs it on a mesh file.
 #pragma once
@@ -20,14 +20,37 @@ enum class IsolatedMode {
 const char* isolatedModeName(IsolatedMode m);               ///< "drop", "spheres"
 IsolatedMode isolatedModeFromName(const std::string& name); ///< ValueError for unknown names
 
-/// Mesh post-processing (thesis chapter 5), in this order: (decimation: to come), Loop
-/// subdivision, isolated particles as spheres.
+/// Which decimation runs.
+enum class Decimator {
+    Quadric, ///< ours: parallel, the same result for any thread count, collapses to the
+             ///< point of least error (lib/src/post/Decimate.cc says how)
+    OpenMesh ///< OpenMesh's serial Decimater (ModQuadric + ModNormalFlipping), the reference:
+             ///< collapses onto an end point; needs a manifold mesh; no error bound
+};
+const char* decimatorName(Decimator d);               ///< "quadric", "openmesh"
+Decimator decimatorFromName(const std::string& name); ///< ValueError for unknown names
+
+/// Mesh post-processing (thesis chapter 5), in this order: decimation, Loop subdivision,
+/// isolated particles as spheres.
 struct PostProcessParams
 {
-    /// Loop subdivision steps, each 4x the triangles, normals then angle-weighted (0 to 3). The
-    /// thesis runs one after decimation; until decimation is here the default is none, since
-    /// on the raw mesh it only multiplies the triangles.
-    int subdivide = 0;
+    /// Decimation (thesis §5.2.1): the fraction of the triangles to remove, cheapest quadric
+    /// error first, so flat bumps go before curved detail; [0, 1), 0 for none.
+    double decimate = 0.8;
+    /// An error bound on decimation, in voxels: no collapse that could leave a vertex more than
+    /// decimateError * voxelSize from the input surface (each vertex carries a bound: its
+    /// ends' bounds plus its distance to the planes of the triangles it replaces). 0 for none.
+    /// With decimate too, decimation stops at whichever comes first. Why not a bound on the
+    /// quadric error itself: that is a mean over the merged planes, and on the real frames a
+    /// bound of (0.1 voxel)^2 still let thin tips be pulled in by half a voxel.
+    double decimateError = 0;
+    Decimator decimator = Decimator::Quadric;
+    /// The voxel that decimateError counts in (world units): reconstruct() sets its own; 0
+    /// means the input mesh's mean edge length.
+    double voxelSize = 0;
+    /// Loop subdivision steps after decimation, each 4x the triangles, rounding off the edges
+    /// that decimation leaves (0 to 3).
+    int subdivide = 1;
     /// reconstruct() only (it has the particles). Spheres by default, as the thesis: a droplet
     /// is part of the fluid, and dropping it silently loses it from the mesh.
     IsolatedMode isolated = IsolatedMode::Spheres;
@@ -39,9 +62,17 @@ struct PostProcessParams
 /// Throws ValueError naming the first invalid field.
 void validate(const PostProcessParams& params);
 
+/// What postProcessMesh did.
+struct PostProcessStats
+{
+    size_t inputTriangles = 0, decimatedTriangles = 0; ///< before and after decimation
+    double decimateError = 0; ///< the largest collapse error made, in voxels (its square root)
+};
+
 /// The surface steps of params on mesh, in order, each timed in ctx under the current scope;
-/// mesh stays closed, manifold and oriented where it was. ValueError for invalid params,
-/// Cancelled when ctx's callback stops it.
-TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params, Context& ctx);
+/// mesh stays closed, manifold and oriented where it was. ValueError for invalid params (or a
+/// non-manifold mesh for Decimator::OpenMesh), Cancelled when ctx's callback stops it.
+TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params, Context& ctx,
+                             PostProcessStats* stats = nullptr);
 
 } // namespace fluidsurf

@@ -86,6 +86,7 @@ struct ReconstructResult
     RadiusChoice radius;
     RasterizeStats field;
     MeshStats meshing;
+    PostProcessStats post;
 };
 
 /// The whole reconstruction of one frame. sourceName goes into the level set's metadata.

@@ -113,8 +113,10 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
     res.field = std::move(field.stats);
     res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing);
     ctx.throwIfCancelled();
-    const auto post = ctx.scope("post"); // always there: timing trees keep one shape
-    res.mesh = postProcessMesh(std::move(res.mesh), params.post, ctx);
+    const auto postScope = ctx.scope("post"); // always there: timing trees keep one shape
+    PostProcessParams post = params.post;
+    if (!(post.voxelSize > 0)) post.voxelSize = res.levelSet->voxelSize()[0];
+    res.mesh = postProcessMesh(std::move(res.mesh), post, ctx, &res.post);
     if (params.post.isolated == IsolatedMode::Spheres && !res.isolatedParticles.empty()) {
         const auto t = ctx.scope("isolated spheres");
         res.isolatedSpheres = appendIsolatedSpheres(res.mesh, particles, res.isolatedParticles,

@@ -8,7 +8,7 @@
 
 #include <fluidsurf/Error.h>
 
-#include <openvdb/Types.h>
+#include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -23,17 +23,10 @@ namespace post {
 
 namespace {
 
-using openvdb::Vec3d;
-
 Vec3d unit(Vec3d v)
 {
     v.normalize();
     return v;
-}
-
-Vec3d toVec3d(const Vec3f& v)
-{
-    return {v.x, v.y, v.z};
 }
 
 constexpr int kMaxLevel = 8; // 1.3M triangles per sphere: far past any useful deviation

@@ -8,7 +8,7 @@
 
 #include "post/Normals.h"
 
-#include <openvdb/Types.h>
+#include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -30,16 +30,6 @@ struct Side
         return lo != o.lo ? lo < o.lo : hi != o.hi ? hi < o.hi : tri < o.tri;
     }
 };
-
-openvdb::Vec3d toVec3d(const Vec3f& p)
-{
-    return {p.x, p.y, p.z};
-}
-
-Vec3f toVec3f(const openvdb::Vec3d& p)
-{
-    return {float(p[0]), float(p[1]), float(p[2])};
-}
 
 /// Loop's weight of each of n neighbours of a smooth point.
 double beta(size_t n)
@@ -92,14 +82,14 @@ TriangleMesh loopSubdivide(const TriangleMesh& in)
     out.points.resize(nv + ne);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
-            const openvdb::Vec3d p = toVec3d(in.points[v]);
+            const Vec3d p = toVec3d(in.points[v]);
             const size_t n = start[v + 1] - start[v];
             size_t creases = 0;
-            openvdb::Vec3d around(0.0), along(0.0);
+            Vec3d around(0.0), along(0.0);
             for (uint32_t i = start[v]; i < start[v + 1]; ++i) {
                 const size_t e = incident[i];
                 const Side& s = sides[first[e]];
-                const openvdb::Vec3d q = toVec3d(in.points[s.lo == v ? s.hi : s.lo]);
+                const Vec3d q = toVec3d(in.points[s.lo == v ? s.hi : s.lo]);
                 around += q;
                 if (crease(e)) ++creases, along += q;
             }
@@ -114,12 +104,12 @@ TriangleMesh loopSubdivide(const TriangleMesh& in)
     tbb::parallel_for(tbb::blocked_range<size_t>(0, ne), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t e = r.begin(); e != r.end(); ++e) {
             const Side& s = sides[first[e]];
-            const openvdb::Vec3d ends = toVec3d(in.points[s.lo]) + toVec3d(in.points[s.hi]);
+            const Vec3d ends = toVec3d(in.points[s.lo]) + toVec3d(in.points[s.hi]);
             if (crease(e)) {
                 out.points[nv + e] = toVec3f(ends * 0.5);
                 continue;
             }
-            openvdb::Vec3d opposite(0.0); // the two corners facing the edge
+            Vec3d opposite(0.0); // the two corners facing the edge
             for (uint32_t i = first[e]; i < first[e + 1]; ++i)
                 opposite += toVec3d(in.points[in.triangles[sides[i].tri][(sides[i].k + 2) % 3]]);
             out.points[nv + e] = toVec3f(ends * (3.0 / 8) + opposite / 8);

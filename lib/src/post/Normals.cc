@@ -5,7 +5,7 @@
 // same order on every run.
 #include "post/Normals.h"
 
-#include <openvdb/Types.h>
+#include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -14,15 +14,6 @@
 
 namespace fluidsurf {
 namespace post {
-
-namespace {
-
-openvdb::Vec3d toVec3d(const Vec3f& p)
-{
-    return {p.x, p.y, p.z};
-}
-
-} // namespace
 
 void computeAngleWeightedNormals(TriangleMesh& mesh)
 {
@@ -41,14 +32,14 @@ void computeAngleWeightedNormals(TriangleMesh& mesh)
     mesh.normals.assign(nv, Vec3f(0, 0, 0));
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
-            const openvdb::Vec3d p = toVec3d(mesh.points[v]);
-            openvdb::Vec3d sum(0.0);
+            const Vec3d p = toVec3d(mesh.points[v]);
+            Vec3d sum(0.0);
             for (uint32_t i = start[v]; i < start[v + 1]; ++i) {
                 const auto& t = mesh.triangles[corner[i]];
                 const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
-                const openvdb::Vec3d a = toVec3d(mesh.points[t[(k + 1) % 3]]) - p,
-                                     b = toVec3d(mesh.points[t[(k + 2) % 3]]) - p;
-                const openvdb::Vec3d n = a.cross(b);
+                const Vec3d a = toVec3d(mesh.points[t[(k + 1) % 3]]) - p,
+                            b = toVec3d(mesh.points[t[(k + 2) % 3]]) - p;
+                const Vec3d n = a.cross(b);
                 const double len = n.length();
                 if (len == 0) continue; // a degenerate triangle has no direction
                 sum += n * (std::atan2(len, a.dot(b)) / len);

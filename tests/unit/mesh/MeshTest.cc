@@ -3,7 +3,6 @@
 // deterministic.
 #include "../field/BruteForce.h"
 #include "../field/RequireGpu.h"
-#include "MeshDistance.h"
 #include "TestData.h"
 
 #include <fluidsurf/MeshCheck.h>
@@ -20,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 namespace fluidsurf {
 namespace {
@@ -58,6 +58,34 @@ TEST(MeshCheck, ThinTrianglesAreCountedByTheirSmallestAngle)
     EXPECT_EQ(r.thinTriangles, 2u);
     EXPECT_NEAR(r.minAngleDegrees, 5, 1e-4);
     EXPECT_NE(describe(r).find("2 under 10 deg"), std::string::npos) << describe(r);
+}
+
+TEST(MeshDistance, ExactToTheNearestTriangle)
+{
+    // a unit square in z = 0 (two triangles), and one triangle above it
+    TriangleMesh square;
+    square.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    square.triangles = {{0, 1, 2}, {0, 2, 3}};
+    TriangleMesh above;
+    above.points = {{0.25f, 0.25f, 0.5f}, {0.75f, 0.25f, 0.5f}, {0.5f, 2.f, 0.5f}};
+    above.triangles = {{0, 1, 2}};
+    // from above: its corners; (0.5, 2, 0.5) is 1 beside the square's edge and 0.5 over it
+    EXPECT_NEAR(meshDistance(above, square, 2.0), std::sqrt(1.0 + 0.25), 1e-6);
+    // from the square: its corner (0, 1, 0) is nearest the edge from (0.25, 0.25, 0.5) to
+    // (0.5, 2, 0.5), and (1, 0, 0) nearest the corner (0.75, 0.25, 0.5)
+    const double corner = std::sqrt(0.25 * 0.25 + 0.25 * 0.25 + 0.25);
+    EXPECT_NEAR(meshDistance(square, above, 2.0),
+                std::max(corner,
+                         [] {
+                             // (0, 1, 0) to the segment: its direction (0.25, 1.75, 0) / |.|
+                             const double dx = 0.25, dy = 1.75, len = std::sqrt(dx * dx + dy * dy);
+                             const double t = (-0.25 * dx + 0.75 * dy) / len; // along the segment
+                             const double px = -0.25 - t * dx / len, py = 0.75 - t * dy / len;
+                             return std::sqrt(px * px + py * py + 0.25);
+                         }()),
+                1e-6);
+    EXPECT_EQ(meshDistance(above, square, 0.9), std::numeric_limits<double>::infinity());
+    EXPECT_EQ(meshDistance(TriangleMesh(), square, 1.0), 0.0);
 }
 
 TEST(MeshCheck, FindsEachKindOfDefect)
@@ -128,8 +156,7 @@ void checkBothMeshers(const openvdb::FloatGrid& grid, const std::string& what,
         << what << ": ours " << describe(r) << "; openvdb " << describe(o);
     EXPECT_NEAR(r.area / o.area, 1, bound.area)
         << what << ": ours " << describe(r) << "; openvdb " << describe(o);
-    const double to = test::oneSidedDistance(own, vdb, dx) / dx,
-                 from = test::oneSidedDistance(vdb, own, dx) / dx;
+    const double to = meshDistance(own, vdb, dx) / dx, from = meshDistance(vdb, own, dx) / dx;
     EXPECT_LE(to, bound.toOpenVdb)
         << what << ": our mesh is up to " << to << " voxel from OpenVDB's";
     EXPECT_LE(from, bound.fromOpenVdb)

@@ -3,7 +3,6 @@
 // and stops cleanly when cancelled.
 #include "TestData.h"
 #include "post/IsolatedSpheres.h"
-#include "post/LoopSubdivision.h"
 
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/Reconstruct.h>
@@ -36,6 +35,7 @@ TEST(Reconstruct, EqualsItsTwoHalvesAndIsWatertight)
     Context ctx;
     ReconstructParams params = ReconstructParams::fromRadius(sp.radius);
     params.post.isolated = IsolatedMode::Drop; // the two halves alone; spheres: the next test
+    params.post.decimate = 0, params.post.subdivide = 0; // the raw mesh; post: further down
     const ReconstructResult res = reconstruct(ps, params, ctx, "drop");
     const RasterizeResult half = rasterizeParticles(ps, Params::fromRadius(sp.radius), "drop");
     EXPECT_EQ(res.levelSet->activeVoxelCount(), half.grid->activeVoxelCount());
@@ -112,81 +112,32 @@ TEST(Reconstruct, IsolatedParticlesBecomeSpheresOfTheirRadius)
     EXPECT_EQ(isolatedModeFromName(isolatedModeName(IsolatedMode::Drop)), IsolatedMode::Drop);
 }
 
-TEST(Reconstruct, SubdivisionComesBeforeTheSpheres)
+TEST(Reconstruct, PostProcessingComesBeforeTheSpheres)
 {
     SceneParams sp;
     sp.count = 20000;
     const ParticleSet ps = generateScene(Scene::Drop, sp);
-    ReconstructParams drop = ReconstructParams::fromRadius(sp.radius);
-    drop.post.isolated = IsolatedMode::Drop;
-    Context a, b;
-    const ReconstructResult plain = reconstruct(ps, drop, a);
-    ReconstructParams params = ReconstructParams::fromRadius(sp.radius);
-    params.post.subdivide = 1;
-    const ReconstructResult res = reconstruct(ps, params, b);
-    const TriangleMesh smooth = post::loopSubdivide(plain.mesh);
+    ReconstructParams raw = ReconstructParams::fromRadius(sp.radius);
+    raw.post.isolated = IsolatedMode::Drop;
+    raw.post.decimate = 0, raw.post.subdivide = 0;
+    Context a, b, c;
+    const ReconstructResult plain = reconstruct(ps, raw, a);
+    const ReconstructResult res = reconstruct(ps, ReconstructParams::fromRadius(sp.radius), b);
+    // the defaults: 80% decimated, one Loop step, the error bound counted in the grid's voxels
+    PostProcessParams post;
+    post.voxelSize = plain.levelSet->voxelSize()[0];
+    const TriangleMesh smooth = postProcessMesh(plain.mesh, post, c);
+    EXPECT_EQ(res.post.inputTriangles, plain.mesh.triangles.size());
+    EXPECT_LE(res.post.decimatedTriangles, size_t(std::ceil(0.2 * plain.mesh.triangles.size())));
     ASSERT_EQ(res.isolatedSpheres, size_t(sp.droplets));
     ASSERT_GT(res.mesh.points.size(), smooth.points.size());
     EXPECT_TRUE(std::equal(smooth.points.begin(), smooth.points.end(), res.mesh.points.begin()));
     EXPECT_TRUE(
         std::equal(smooth.triangles.begin(), smooth.triangles.end(), res.mesh.triangles.begin()));
     EXPECT_EQ(res.mesh.triangles.size(),
-              4 * plain.mesh.triangles.size() +
+              4 * res.post.decimatedTriangles +
                   size_t(sp.droplets) * post::unitIcosphere(3).triangles.size());
-    EXPECT_TRUE(checkMesh(res.mesh).watertight());
-    EXPECT_TRUE(b.timing().has("subdivide"));
-    params.post.subdivide = 4;
-    EXPECT_THROW(reconstruct(ps, params, b), ValueError);
-}
-
-TEST(Reconstruct, FieldLengthsAreInUnitsOfR)
-{
-    ReconstructParams p;
-    p.field.voxelSize = 0.5, p.field.influenceRadius = 8;
-    const Params f = p.fieldParams(0.02);
-    EXPECT_EQ(f.radius, 0.02);
-    EXPECT_EQ(f.voxelSize, 0.5 * 0.02);
-    EXPECT_EQ(f.influenceRadius, 8 * 0.02);
-    EXPECT_EQ(f.smoothingLength, 4 * 0.02);
-    EXPECT_EQ(f.bandWidth, 2 * 0.02);
-    EXPECT_EQ(f.halfWidth, 3); // voxels, not a length
-    const Params d = ReconstructParams::fromRadius(0.025).fieldParams(0.025);
-    const Params ref = Params::fromRadius(0.025);
-    EXPECT_EQ(d.voxelSize, ref.voxelSize);
-    EXPECT_EQ(d.influenceRadius, ref.influenceRadius);
-    EXPECT_EQ(d.bandWidth, ref.bandWidth);
-}
-
-TEST(Reconstruct, ChoosesTheRadiusAndSaysHow)
-{
-    SceneParams sp;
-    sp.count = 4000;
-    ParticleSet ps = generateScene(Scene::Block, sp);
-    // Estimated: half the median nearest-neighbour distance (the lattice spacing 2r here).
-    const RadiusChoice est = chooseRadius(ps, 0);
-    EXPECT_EQ(est.source, RadiusSource::Estimated);
-    EXPECT_EQ(est.radius, estimateSpacing(ps).radius);
-    EXPECT_NEAR(est.radius, sp.radius, 1e-6);
-    // The radius attribute's largest value, unless told to ignore it.
-    std::vector<float> pscale(ps.size(), 0.01f);
-    pscale[17] = 0.03f;
-    ps.addFloat("pscale", 1, pscale);
-    const RadiusChoice attr = chooseRadius(ps, 0);
-    EXPECT_EQ(attr.source, RadiusSource::Attribute);
-    EXPECT_EQ(attr.radius, 0.03f);
-    EXPECT_NE(attr.detail.find("pscale"), std::string::npos);
-    EXPECT_EQ(chooseRadius(ps, 0, false).source, RadiusSource::Estimated);
-    EXPECT_EQ(chooseRadius(ps, 0.5).radius, 0.5);
-    // Nothing to estimate from.
-    ParticleSet one;
-    one.positions.push_back(Vec3f(0, 0, 0));
-    EXPECT_THROW(chooseRadius(one, 0), ValueError);
-    // reconstruct() reports the choice it made.
-    ps.attributes.clear();
-    Context ctx;
-    const ReconstructResult res = reconstruct(ps, ReconstructParams(), ctx);
-    EXPECT_EQ(res.radius.source, RadiusSource::Estimated);
-    EXPECT_NEAR(res.field.bandWidth, 2 * res.radius.radius, 1e-12);
+    EXPECT_TRUE(checkMesh(res.mesh).watertight()) << describe(checkMesh(res.mesh));
 }
 
 TEST(Reconstruct, TimingTreeNestsTheStages)
@@ -199,13 +150,16 @@ TEST(Reconstruct, TimingTreeNestsTheStages)
     ctx.timing().finish();
     const TimingTree& t = ctx.timing();
     const auto& nodes = t.nodes();
-    // Top level: rasterize, mesh, then post (there even with nothing to do: a ball has no
-    // isolated particles); the field's stages nest inside rasterize.
+    // Top level: rasterize, mesh, then post (decimate and subdivide; no spheres: a ball has
+    // no isolated particles); the field's stages nest inside rasterize.
     ASSERT_EQ(t.root().children.size(), 3u);
     EXPECT_EQ(nodes[t.root().children[0]].name, "rasterize");
     EXPECT_EQ(nodes[t.root().children[1]].name, "mesh");
     EXPECT_EQ(nodes[t.root().children[2]].name, "post");
-    EXPECT_TRUE(nodes[t.root().children[2]].children.empty());
+    std::vector<std::string> post;
+    for (size_t c : nodes[t.root().children[2]].children)
+        post.push_back(nodes[c].name);
+    EXPECT_EQ(post, (std::vector<std::string>{"decimate", "subdivide"}));
     std::vector<std::string> inner;
     double sum = 0;
     for (size_t c : nodes[t.root().children[0]].children)

@@ -1,0 +1,137 @@
+// MeshDistance.cc - one side of the Hausdorff distance between meshes (see MeshCheck.h): exact
+// point-to-triangle distances, the candidate triangles from a sorted table of (cell, triangle)
+// for cells of the search radius, the points in parallel (the maximum is the same in any order).
+#include <fluidsurf/MeshCheck.h>
+
+#include "util/Vec3d.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace fluidsurf {
+
+namespace {
+
+double segmentDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b)
+{
+    const Vec3d ab = b - a;
+    const double len2 = ab.lengthSqr();
+    const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+    return (a + ab * t - p).length();
+}
+
+/// To the plane where p projects inside the triangle, else to the nearest side.
+double triangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c)
+{
+    const Vec3d n = (b - a).cross(c - a);
+    const double n2 = n.lengthSqr();
+    if (n2 > 0) {
+        const double h = (p - a).dot(n) / n2;
+        const Vec3d q = p - n * h;
+        if ((b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 &&
+            (a - c).cross(q - c).dot(n) >= 0)
+            return std::abs(h) * std::sqrt(n2);
+    }
+    return std::min({segmentDistance(p, a, b), segmentDistance(p, b, c), segmentDistance(p, c, a)});
+}
+
+class Buckets
+{
+public:
+    Buckets(const TriangleMesh& mesh, double cell) : mMesh(mesh), mCell(cell)
+    {
+        std::vector<size_t> first(mesh.triangles.size() + 1, 0);
+        auto range = [&](uint32_t t, int64_t lo[3], int64_t hi[3]) {
+            for (int k = 0; k < 3; ++k) {
+                double a = std::numeric_limits<double>::max(), b = -a;
+                for (uint32_t v : mesh.triangles[t])
+                    a = std::min(a, double(mesh.points[v][k])),
+                    b = std::max(b, double(mesh.points[v][k]));
+                lo[k] = index(a), hi[k] = index(b);
+            }
+        };
+        for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+            int64_t lo[3], hi[3];
+            range(t, lo, hi);
+            first[t + 1] =
+                first[t] + size_t((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1));
+        }
+        mEntries.resize(first.back());
+        tbb::parallel_for(tbb::blocked_range<uint32_t>(0, uint32_t(mesh.triangles.size())),
+                          [&](const tbb::blocked_range<uint32_t>& r) {
+                              for (uint32_t t = r.begin(); t != r.end(); ++t) {
+                                  int64_t lo[3], hi[3];
+                                  range(t, lo, hi);
+                                  size_t i = first[t];
+                                  for (int64_t x = lo[0]; x <= hi[0]; ++x)
+                                      for (int64_t y = lo[1]; y <= hi[1]; ++y)
+                                          for (int64_t z = lo[2]; z <= hi[2]; ++z)
+                                              mEntries[i++] = {key(x, y, z), t};
+                              }
+                          });
+        tbb::parallel_sort(mEntries.begin(), mEntries.end());
+    }
+
+    /// Distance from p to the mesh, or +inf beyond one cell.
+    double operator()(const Vec3d& p) const
+    {
+        double best = std::numeric_limits<double>::infinity();
+        for (int64_t x = index(p[0] - mCell); x <= index(p[0] + mCell); ++x)
+            for (int64_t y = index(p[1] - mCell); y <= index(p[1] + mCell); ++y)
+                for (int64_t z = index(p[2] - mCell); z <= index(p[2] + mCell); ++z) {
+                    const uint64_t k = key(x, y, z);
+                    auto it = std::lower_bound(mEntries.begin(), mEntries.end(),
+                                               std::pair<uint64_t, uint32_t>(k, 0));
+                    for (; it != mEntries.end() && it->first == k; ++it) {
+                        const auto& tri = mMesh.triangles[it->second];
+                        best = std::min(best, triangleDistance(p, toVec3d(mMesh.points[tri[0]]),
+                                                               toVec3d(mMesh.points[tri[1]]),
+                                                               toVec3d(mMesh.points[tri[2]])));
+                    }
+                }
+        return best <= mCell ? best : std::numeric_limits<double>::infinity();
+    }
+
+private:
+    int64_t index(double v) const { return int64_t(std::floor(v / mCell)); }
+    static uint64_t key(int64_t x, int64_t y, int64_t z)
+    {
+        return (uint64_t(x & 0x1fffff) << 42) | (uint64_t(y & 0x1fffff) << 21) |
+               uint64_t(z & 0x1fffff);
+    }
+    const TriangleMesh& mMesh;
+    double mCell;
+    std::vector<std::pair<uint64_t, uint32_t>> mEntries; ///< (cell, triangle), sorted
+};
+
+} // namespace
+
+double meshDistance(const TriangleMesh& a, const TriangleMesh& b, double reach)
+{
+    if (a.triangles.empty()) return 0;
+    if (b.triangles.empty() || !(reach > 0)) return std::numeric_limits<double>::infinity();
+    const Buckets distance(b, reach);
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, a.triangles.size()), 0.0,
+        [&](const tbb::blocked_range<size_t>& r, double worst) {
+            for (size_t t = r.begin(); t != r.end(); ++t) {
+                const auto& tri = a.triangles[t];
+                const Vec3d p0 = toVec3d(a.points[tri[0]]), p1 = toVec3d(a.points[tri[1]]),
+                            p2 = toVec3d(a.points[tri[2]]);
+                // the corners (a vertex once per triangle: simpler than once, and cheap) and
+                // the centroid, for a middle that bulges away from b
+                worst = std::max({worst, distance(p0), distance(p1), distance(p2),
+                                  distance((p0 + p1 + p2) / 3.0)});
+            }
+            return worst;
+        },
+        [](double x, double y) { return std::max(x, y); });
+}
+
+} // namespace fluidsurf

@@ -1,0 +1,45 @@
+// Decimate.h - parallel quadric-error decimation (thesis §5.2.1, Garland and Heckbert 1997):
+// edge collapses, cheapest first, each to the point of least quadric error, guarded so that a
+// closed manifold surface stays closed, manifold, oriented and free of flipped or sliver
+// triangles. The same result for any thread count.
+#pragma once
+
+#include <fluidsurf/Mesh.h>
+
+#include <cstddef>
+#include <limits>
+
+namespace fluidsurf {
+namespace post {
+
+/// Where decimation stops: at whichever of the two comes first.
+struct DecimateTarget
+{
+    /// Collapse until at most this many triangles are left (0: no count target).
+    size_t triangles = 0;
+    /// Collapse nothing whose error exceeds this (a squared length: the collapsed vertex's
+    /// area-weighted mean squared distance to the original triangles' planes it stands for).
+    double maxError = std::numeric_limits<double>::infinity();
+    /// Collapse nothing that could leave a vertex farther than this from the input surface
+    /// (world units): each vertex carries a bound, its ends' larger bound plus the new point's
+    /// largest distance to the planes of the triangles the collapse replaces.
+    double maxDrift = std::numeric_limits<double>::infinity();
+};
+
+struct DecimateStats
+{
+    size_t passes = 0;    ///< rounds of blocks (see Decimate.cc)
+    size_t collapses = 0; ///< edges collapsed, two triangles each
+    double maxError = 0;  ///< the largest error of a collapse made (squared length)
+    double maxDrift = 0;  ///< the largest drift bound a vertex was given (length)
+    size_t refused = 0;   ///< collapses a guard refused
+};
+
+/// mesh decimated to target, with angle-weighted normals. Vertices on an open border, on a
+/// non-manifold edge or of a non-manifold fan never move, so whatever was open or non-manifold
+/// stays as it was. Points not used by the result are dropped.
+TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target,
+                      DecimateStats* stats = nullptr);
+
+} // namespace post
+} // namespace fluidsurf

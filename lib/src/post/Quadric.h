@@ -1,0 +1,71 @@
+// Quadric.h - Garland and Heckbert's quadric error: the weighted sum of squared distances from a
+// point to a set of planes, kept as a symmetric 3x3 matrix, a vector and a constant so that sets
+// merge by addition (the error of a collapsed vertex is the error to all planes it replaced).
+#pragma once
+
+#include "util/Vec3d.h"
+
+namespace fluidsurf {
+namespace post {
+
+struct Quadric
+{
+    double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0; ///< sum of w n n^T
+    double b0 = 0, b1 = 0, b2 = 0;                               ///< sum of w d n
+    double c = 0;                                                ///< sum of w d^2
+    double w = 0;                                                ///< sum of w (the area)
+
+    /// The plane through p with unit normal n, weighted by w (a triangle's area).
+    static Quadric plane(const Vec3d& n, const Vec3d& p, double w)
+    {
+        const double d = -n.dot(p);
+        Quadric q;
+        q.a00 = w * n[0] * n[0], q.a01 = w * n[0] * n[1], q.a02 = w * n[0] * n[2];
+        q.a11 = w * n[1] * n[1], q.a12 = w * n[1] * n[2], q.a22 = w * n[2] * n[2];
+        q.b0 = w * d * n[0], q.b1 = w * d * n[1], q.b2 = w * d * n[2];
+        q.c = w * d * d, q.w = w;
+        return q;
+    }
+
+    Quadric& operator+=(const Quadric& o)
+    {
+        a00 += o.a00, a01 += o.a01, a02 += o.a02, a11 += o.a11, a12 += o.a12, a22 += o.a22;
+        b0 += o.b0, b1 += o.b1, b2 += o.b2, c += o.c, w += o.w;
+        return *this;
+    }
+    Quadric operator+(const Quadric& o) const { return Quadric(*this) += o; }
+
+    /// Weighted sum of squared distances from p to the planes.
+    double error(const Vec3d& p) const
+    {
+        const double x = p[0], y = p[1], z = p[2];
+        const double e = x * (a00 * x + 2 * a01 * y + 2 * a02 * z) + y * (a11 * y + 2 * a12 * z) +
+                         a22 * z * z + 2 * (b0 * x + b1 * y + b2 * z) + c;
+        return e > 0 ? e : 0; // rounding can take a zero error below 0
+    }
+
+    /// The point of least error, pulled towards `rest` along the directions the planes leave
+    /// free: on a flat patch every point of the plane has the same error, and the plain minimum
+    /// is then undefined (a singular matrix) or, with a little noise, far away along the plane.
+    /// The pull, 1e-3 of the planes' weight, decides only such directions.
+    Vec3d minimizer(const Vec3d& rest) const
+    {
+        const double eps = 1e-3 * (a00 + a11 + a22);
+        if (!(eps > 0)) return rest;
+        const double m00 = a00 + eps, m11 = a11 + eps, m22 = a22 + eps;
+        const double r0 = eps * rest[0] - b0, r1 = eps * rest[1] - b1, r2 = eps * rest[2] - b2;
+        // Cramer's rule on the symmetric positive definite matrix
+        const double c00 = m11 * m22 - a12 * a12, c01 = a02 * a12 - a01 * m22,
+                     c02 = a01 * a12 - a02 * m11;
+        const double det = m00 * c00 + a01 * c01 + a02 * c02;
+        if (!(det > 0)) return rest;
+        const double c11 = m00 * m22 - a02 * a02, c12 = a01 * a02 - m00 * a12,
+                     c22 = m00 * m11 - a01 * a01;
+        return Vec3d(c00 * r0 + c01 * r1 + c02 * r2, c01 * r0 + c11 * r1 + c12 * r2,
+                     c02 * r0 + c12 * r1 + c22 * r2) /
+               det;
+    }
+};
+
+} // namespace post
+} // namespace fluidsurf
