@@ -109,18 +109,19 @@ class Block
 public:
     Block(State& s, const uint32_t* tris, size_t n, const std::vector<uint32_t>& valence) : mS(s)
     {
-        for (size_t i = 0; i < n; ++i)
-            for (uint32_t v : s.triangles[tris[i]])
-                mGlobal.push_back(v);
-        std::sort(mGlobal.begin(), mGlobal.end());
-        mGlobal.erase(std::unique(mGlobal.begin(), mGlobal.end()), mGlobal.end());
-        const size_t nv = mGlobal.size();
-        mTris.resize(n);
+        // local vertices in ascending mesh order, from one sort of (vertex, corner) keys
+        std::vector<uint64_t> corners(3 * n);
         for (size_t i = 0; i < n; ++i)
             for (int k = 0; k < 3; ++k)
-                mTris[i][k] = uint32_t(
-                    std::lower_bound(mGlobal.begin(), mGlobal.end(), s.triangles[tris[i]][k]) -
-                    mGlobal.begin());
+                corners[3 * i + k] = uint64_t(s.triangles[tris[i]][k]) << 32 | (3 * i + k);
+        std::sort(corners.begin(), corners.end());
+        mTris.resize(n);
+        for (size_t c = 0; c < corners.size(); ++c) {
+            const uint32_t v = uint32_t(corners[c] >> 32), corner = uint32_t(corners[c]);
+            if (mGlobal.empty() || mGlobal.back() != v) mGlobal.push_back(v);
+            mTris[corner / 3][corner % 3] = uint32_t(mGlobal.size() - 1);
+        }
+        const size_t nv = mGlobal.size();
         mTriAlive.assign(n, 1);
         mStart.assign(nv + 1, 0);
         for (const Tri& t : mTris)
