@@ -166,7 +166,7 @@ print(v, faces)
 PY
 check "mesh --help" bash -c "'$BIN' mesh --help | grep -q -- '--mesher'"
 check "reconstruct --help" bash -c "'$BIN' reconstruct --help | grep -q -- '--influence'"
-check "reconstruct a generated drop (raw mesh)" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop.obj" --vdb "$T/drop_ls.vdb" -q --isolated drop --decimate off --subdivide 0
+check "reconstruct a generated drop (raw mesh)" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop.obj" --vdb "$T/drop_ls.vdb" -q --isolated drop --raw
 check "reconstruct: OBJ closed and oriented (independent check)" bash -c "/usr/bin/python3 '$T/objcheck.py' '$T/drop.obj' >/dev/null"
 check "reconstruct --vdb wrote the level set" bash -c "vdb_print '$T/drop_ls.vdb' | grep -q surface"
 check "mesh of that .vdb = reconstruct's mesh" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop2.obj' -q && cmp -s '$T/drop.obj' '$T/drop2.obj'"
@@ -193,13 +193,14 @@ check "post --decimate-error 0.1 alone: fewer triangles, closed and oriented" ba
 expect_error "reconstruct --decimate must be a fraction or off" "a fraction of the triangles to remove" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --decimate most
 expect_error "reconstruct --decimate 1 removes everything: refused" "decimation fraction" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --decimate 1
 expect_error "openmesh takes no error bound" "takes no error bound" "$BIN" post "$T/drop.obj" -o "$T/bad.obj" --decimator openmesh --decimate-error 0.5
+expect_error "--raw leaves out every step: no step options with it" "excludes --raw" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --raw --smooth 3
 check "nothing written for refused options" test ! -e "$T/bad.obj"
 head -c 3000 "$T/drop.obj" >"$T/cut_mesh.obj"
 expect_error "post: a cut OBJ is one error, no output" "cut_mesh.obj" "$BIN" post "$T/cut_mesh.obj" -o "$T/cut_post.obj"
 check "post: nothing written for the cut OBJ" test ! -e "$T/cut_post.obj"
 check "post --help has examples" bash -c "'$BIN' post --help | grep -q 'fluidsurf post frame.obj'"
 check "reconstruct: isolated droplets meshed as spheres by default, one closed component each" bash -c "[ '${n:-0}' -gt 0 ] && [ '$c1' -eq \$(( ${c0:-0} + ${n:-0} )) ] && /usr/bin/python3 '$T/objcheck.py' '$T/drop_s.obj' >/dev/null"
-"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_s5.obj" -q --sphere-deviation 0.05 --decimate off --subdivide 0
+"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/drop_s5.obj" -q --sphere-deviation 0.05 --raw
 t3=$("$BIN" info "$T/drop_s5.obj" | grep -Eo '[0-9]+ triangles' | head -n1 | grep -Eo '[0-9]+')
 check "reconstruct --sphere-deviation 0.05: 320 triangles a sphere (level 2)" bash -c "[ '${t3:-0}' -eq \$(( ${t0:-0} + 320 * ${n:-0} )) ]"
 check "mesh --check says watertight" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/drop3.ply' --check | grep -q watertight"

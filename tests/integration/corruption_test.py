@@ -56,7 +56,7 @@ for ext in ("vdb", "bgeo.gz", "ply", "xyz", "vtk"):
 run(["convert", "-q", S("frame.bgeo"), S("plain.bgeo")])  # the real .bgeo is gzip'd
 run(["rasterize", "-q", S("frame.bgeo"), "-r", R, "-o", S("surface.vdb")])
 # raw marching-cubes meshes (the cut fractions below are placed for their layout)
-RAW = ["--decimate", "off", "--subdivide", "0"]
+RAW = ["--raw"]
 run(["reconstruct", "-q", S("frame.bgeo"), "-r", R, "-o", S("mesh.obj")] + RAW)
 run(["reconstruct", "-q", S("frame.bgeo"), "-r", R, "-o", S("mesh.ply")] + RAW)
 xyz = read(S("frame.xyz"))

@@ -1,6 +1,8 @@
 // Bench.h - benchmark cases of fluidsurf_bench and the timing helpers they share.
 #pragma once
 
+#include <fluidsurf/PostProcess.h>
+
 #include <fluidsurf/ParticleSet.h>
 
 #include <algorithm>
@@ -49,8 +51,9 @@ int runMeshBench(const MeshBenchOptions& options);
 struct PostBenchOptions
 {
     std::string scenes = "real,large,drop-1M";
-    double decimate = 0.8;    ///< the share of triangles removed
-    double decimateError = 0; ///< and the error bound, in voxels (0: none)
+    double decimate = 0.8;                   ///< the share of triangles removed
+    double decimateError = 0;                ///< and the error bound, in voxels (0: none)
+    int smooth = PostProcessParams().smooth; ///< rounds of smoothing
     int repeat = 3;
     int openMeshRepeat = 1; ///< runs of OpenMesh's serial Decimater (0: none)
     std::string shared = "../shared/data";

@@ -1,8 +1,8 @@
 // PostBench.cc - `fluidsurf_bench post`: the thesis' Table 5.1 (field + triangulation,
-// decimation, subdivision, total, triangle counts) per scene, with OpenMesh's serial Decimater
-// reaching the same triangle count on the same raw mesh as the baseline row, and what each
-// costs in fidelity: the symmetric Hausdorff distance to the raw mesh (voxels) and the enclosed
-// volume against the raw mesh's.
+// decimation, smoothing (ours), subdivision, total, triangle counts) per scene, with OpenMesh's
+// serial Decimater reaching the same triangle count on the same raw mesh as the baseline row, and
+// what each costs in fidelity: the symmetric Hausdorff distance to the raw mesh (voxels) and the
+// enclosed volume against the raw mesh's.
 #include "Bench.h"
 
 #include <fluidsurf/MeshCheck.h>
@@ -52,7 +52,8 @@ int runPostBench(const PostBenchOptions& o)
     for (const Case& c : loadCases(o.scenes, o.shared)) {
         // field + triangulation: reconstruct() with nothing after the mesher
         ReconstructParams rp = ReconstructParams::fromRadius(c.radius);
-        rp.post.decimate = 0, rp.post.subdivide = 0, rp.post.isolated = IsolatedMode::Drop;
+        rp.post.decimate = 0, rp.post.smooth = 0, rp.post.subdivide = 0;
+        rp.post.isolated = IsolatedMode::Drop;
         ReconstructResult raw;
         std::vector<double> t;
         for (int k = 0; k < o.repeat; ++k) {
@@ -81,30 +82,33 @@ int runPostBench(const PostBenchOptions& o)
                     c.name.c_str(), fieldTri, raw.mesh.triangles.size(), rawReport.thinTriangles,
                     rawReport.watertight() ? "yes" : describe(rawReport).c_str());
 
+        // each step on the last one's mesh, alone (PostProcessParams with the others off)
+        auto step = [&](const TriangleMesh& in, PostProcessParams p, TriangleMesh& out) {
+            p.voxelSize = voxel;
+            std::vector<double> times;
+            for (int k = 0; k < o.repeat; ++k) {
+                Context ctx;
+                times.push_back(seconds([&] { out = postProcessMesh(in, p, ctx); }));
+            }
+            return median(times);
+        };
         PostProcessParams dec;
-        dec.decimate = o.decimate, dec.subdivide = 0, dec.voxelSize = voxel;
-        dec.decimateError = o.decimateError;
-        TriangleMesh decimated;
-        t.clear();
-        for (int k = 0; k < o.repeat; ++k) {
-            Context ctx;
-            t.push_back(seconds([&] { decimated = postProcessMesh(raw.mesh, dec, ctx); }));
-        }
-        const double decSeconds = median(t);
+        dec.decimate = o.decimate, dec.decimateError = o.decimateError;
+        dec.smooth = 0, dec.subdivide = 0;
+        TriangleMesh decimated, smoothed, subdivided;
+        const double decSeconds = step(raw.mesh, dec, decimated);
         row("decimation (ours)", decSeconds, decimated, true);
-
+        PostProcessParams sm;
+        sm.decimate = 0, sm.smooth = o.smooth, sm.subdivide = 0;
+        const double smSeconds = step(decimated, sm, smoothed);
+        row("smoothing", smSeconds, smoothed, true);
         PostProcessParams sub;
-        sub.decimate = 0, sub.subdivide = 1;
-        TriangleMesh smooth;
-        t.clear();
-        for (int k = 0; k < o.repeat; ++k) {
-            Context ctx;
-            t.push_back(seconds([&] { smooth = postProcessMesh(decimated, sub, ctx); }));
-        }
-        const double subSeconds = median(t);
-        row("subdivision (1 Loop step)", subSeconds, smooth, true);
-        row("decimation + subdivision", decSeconds + subSeconds, smooth, false);
-        row("total", fieldTri + decSeconds + subSeconds, smooth, false);
+        sub.decimate = 0, sub.smooth = 0, sub.subdivide = 1;
+        const double subSeconds = step(smoothed, sub, subdivided);
+        row("subdivision (1 Loop step)", subSeconds, subdivided, true);
+        const double post = decSeconds + smSeconds + subSeconds;
+        row("decimation + smoothing + subdivision", post, subdivided, false);
+        row("total", fieldTri + post, subdivided, false);
 
         if (o.openMeshRepeat > 0) {
             // the same triangle count as ours reached (an error bound may have stopped it)

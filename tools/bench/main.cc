@@ -3,7 +3,7 @@
 //   fluidsurf_bench io [--count N] [--repeat K]   particle read throughput per format
 //   fluidsurf_bench field [--scenes ...]          rasterize stages vs baselines and OpenVDB
 //   fluidsurf_bench mesh [--scenes ...]           meshing stage vs volumeToMesh; whole pipeline
-//   fluidsurf_bench post [--scenes ...]           decimation and subdivision (thesis Table 5.1)
+//   fluidsurf_bench post [--scenes ...]           decimation, smoothing, subdivision (Table 5.1)
 #include "Bench.h"
 
 #include <CLI/CLI.hpp>
@@ -60,7 +60,8 @@ int main(int argc, char** argv)
         ->capture_default_str();
     fluidsurf::bench::PostBenchOptions post;
     CLI::App* postCmd = app.add_subcommand(
-        "post", "decimation and subdivision per scene (thesis Table 5.1) vs OpenMesh's Decimater");
+        "post", "decimation, smoothing and subdivision per scene (thesis Table 5.1) vs OpenMesh's "
+                "Decimater");
     postCmd
         ->add_option("--scenes", post.scenes,
                      "real, large, hilbert, drop-1M, ... (comma-separated)")
@@ -69,6 +70,7 @@ int main(int argc, char** argv)
         ->capture_default_str();
     postCmd->add_option("--decimate-error", post.decimateError, "error bound, voxels (0: none)")
         ->capture_default_str();
+    postCmd->add_option("--smooth", post.smooth, "rounds of smoothing")->capture_default_str();
     postCmd->add_option("--repeat", post.repeat, "runs per case (median)")->capture_default_str();
     postCmd
         ->add_option("--openmesh-repeat", post.openMeshRepeat,

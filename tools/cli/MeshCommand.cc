@@ -121,29 +121,41 @@ void addPostCounts(const PostProcessStats& s, std::vector<std::pair<std::string,
     counts.push_back({"decimate_error_voxels", s.decimateError});
 }
 
-/// Decimation and subdivision, for the commands that post-process a mesh.
+/// Decimation, smoothing and subdivision, for the commands that post-process a mesh.
 void addPostOptions(CLI::App* cmd, PipelineOptions& o)
 {
     PostProcessParams& p = o.params.post;
-    cmd->add_option("--decimate", o.decimate,
-                    "share of the triangles to remove by quadric error, cheapest first "
-                    "(flat bumps go first, as in the thesis), before subdividing; or off")
-        ->capture_default_str();
-    cmd->add_option("--decimate-error", p.decimateError,
-                    "also stop decimating where a collapse would move the surface by more than "
-                    "about K voxels (its quadric error over (K voxel)^2); 0 for no bound")
-        ->capture_default_str()
-        ->check(CLI::Range(0.0, 1e6));
-    cmd->add_option("--decimator", o.decimator,
-                    "quadric (ours: parallel, the same result for any -j) or openmesh "
-                    "(OpenMesh's serial Decimater, the reference)")
-        ->capture_default_str()
-        ->check(CLI::IsMember({"quadric", "openmesh"}));
-    cmd->add_option("--subdivide", p.subdivide,
-                    "Loop subdivision steps after decimation (each 4x the triangles; rounds "
-                    "off the edges decimation leaves); 0 to 3")
-        ->capture_default_str()
-        ->check(CLI::Range(0, 3));
+    std::vector<CLI::Option*> steps;
+    steps.push_back(cmd->add_option("--decimate", o.decimate,
+                                    "share of the triangles to remove by quadric error, cheapest "
+                                    "first (flat bumps go first, as in the thesis); or off")
+                        ->capture_default_str());
+    steps.push_back(cmd->add_option("--decimate-error", p.decimateError,
+                                    "also stop decimating where a vertex could end up more than "
+                                    "K voxels from the input surface; 0 for no bound")
+                        ->capture_default_str()
+                        ->check(CLI::Range(0.0, 1e6)));
+    steps.push_back(cmd->add_option("--decimator", o.decimator,
+                                    "quadric (ours: parallel, the same result for any -j) or "
+                                    "openmesh (OpenMesh's serial Decimater, the reference)")
+                        ->capture_default_str()
+                        ->check(CLI::IsMember({"quadric", "openmesh"})));
+    steps.push_back(cmd->add_option("--smooth", p.smooth,
+                                    "rounds of smoothing after decimation (along the normals, "
+                                    "no point moving more than 0.2 voxel): takes out the "
+                                    "particles' bumps on flat fluid; 0 to 100, 0 for none")
+                        ->capture_default_str()
+                        ->check(CLI::Range(0, 100)));
+    steps.push_back(cmd->add_option("--subdivide", p.subdivide,
+                                    "Loop subdivision steps last (each 4x the triangles; rounds "
+                                    "off the edges decimation leaves); 0 to 3")
+                        ->capture_default_str()
+                        ->check(CLI::Range(0, 3)));
+    CLI::Option* raw = cmd->add_flag("--raw", o.raw,
+                                     "no decimation, smoothing or subdivision: the mesh as "
+                                     "marching cubes made it (or as read, for post)");
+    for (CLI::Option* step : steps)
+        raw->excludes(step);
 }
 
 } // namespace
@@ -196,17 +208,19 @@ Runner addPostCommand(CLI::App& app)
 {
     auto o = std::make_shared<MeshOptions>();
     CLI::App* cmd = app.add_subcommand(
-        "post", "Post-process triangle mesh(es): quadric decimation, then Loop subdivision");
+        "post", "Post-process triangle mesh(es): quadric decimation, smoothing, Loop subdivision");
     cmd->add_option("input", o->input, "mesh file (.obj or .ply) or frame pattern")->required();
     addMeshOutputOptions(cmd, *o, Makes::Mesh);
     addPostOptions(cmd, o->pipeline);
     cmd->add_option("--voxel-size", o->pipeline.params.post.voxelSize,
-                    "the voxel --decimate-error counts in, world units (default: the input's "
-                    "mean edge length; give the grid's voxel to match reconstruct)")
+                    "the voxel that --decimate-error and the steps' bounds count in, world "
+                    "units (default: the input's mean edge length; give the grid's voxel to "
+                    "match reconstruct)")
         ->check(CLI::PositiveNumber);
     cmd->footer("Examples:\n"
                 "  fluidsurf post frame.obj -o frame_smooth.obj\n"
                 "  fluidsurf post frame.ply -o frame_light.ply --decimate 0.9 --subdivide 0\n"
+                "  fluidsurf post frame.ply -o frame_fine.ply --decimate off --smooth 10\n"
                 "  fluidsurf post 'obj/f_{:04}.obj' -o 'smooth/f_{:04}.ply' --frames 1-100\n"
                 "Reads any triangle mesh (.obj, .ply) as the readers of particle files do: a\n"
                 "broken file is one error and no output. Borders and non-manifold edges are\n"
@@ -259,7 +273,7 @@ Runner addReconstructCommand(CLI::App& app)
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
-        "  fluidsurf reconstruct frame.bgeo -r 0.025 -o raw.obj --decimate off --subdivide 0\n"
+        "  fluidsurf reconstruct frame.bgeo -r 0.025 -o raw.obj --raw\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj --vdb frame.vdb --check\n"
         "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'obj/f_{:04}.obj' --frames 1-100\n"
         "  fluidsurf reconstruct frame.bgeo -o frame.obj -v --stats frame.json   (r estimated)\n"

@@ -156,6 +156,7 @@ ReconstructParams PipelineOptions::resolved() const
             throw ValueError("--decimate " + decimate +
                              ": a fraction of the triangles to remove (0.8) or 'off'");
     }
+    if (raw) p.post.decimate = 0, p.post.decimateError = 0, p.post.smooth = 0, p.post.subdivide = 0;
     return p;
 }
 

@@ -26,11 +26,12 @@ struct PipelineOptions
     std::string field = "ssp07", method = "narrow-band", device = "cpu", mesher = "mc",
                 isolated = "spheres", decimate = "0.8", decimator = "quadric";
     bool ignoreRadiusAttribute = false;
+    bool raw = false; ///< --raw: no decimation, smoothing or subdivision
     int threads = 0;
     bool quiet = false, verbose = false, check = false;
     std::string stats; ///< --stats FILE.json
 
-    /// The params after parsing (enum names, radius attribute, --decimate). ValueError for a
+    /// The params after parsing (enum names, radius attribute, --decimate, --raw). ValueError for a
     /// --decimate that is neither a fraction nor "off".
     ReconstructParams resolved() const;
     /// A context for these options: device, threads, and Ctrl-C as a clean stop. The returned

@@ -30,8 +30,10 @@ enum class Decimator {
 const char* decimatorName(Decimator d);               ///< "quadric", "openmesh"
 Decimator decimatorFromName(const std::string& name); ///< ValueError for unknown names
 
-/// Mesh post-processing (thesis chapter 5), in this order: decimation, Loop subdivision,
-/// isolated particles as spheres.
+/// Mesh post-processing (thesis chapter 5), in this order: decimation, smoothing (ours), Loop
+/// subdivision, isolated particles as spheres. Each surface step moves the surface by a bounded
+/// amount (a share of half a voxel, lib/src/post/PostProcess.cc), so that thin tips and
+/// droplets keep their size.
 struct PostProcessParams
 {
     /// Decimation (thesis §5.2.1): the fraction of the triangles to remove, cheapest quadric
@@ -45,9 +47,14 @@ struct PostProcessParams
     /// bound of (0.1 voxel)^2 still let thin tips be pulled in by half a voxel.
     double decimateError = 0;
     Decimator decimator = Decimator::Quadric;
-    /// The voxel that decimateError counts in (world units): reconstruct() sets its own; 0
-    /// means the input mesh's mean edge length.
+    /// The voxel that decimateError and the steps' bounds count in (world units):
+    /// reconstruct() sets its own; 0 means the input mesh's mean edge length.
     double voxelSize = 0;
+    /// Smoothing after decimation (ours; not in the thesis): rounds of Taubin smoothing along
+    /// the normals, each point held within 0.2 voxel of where it was. Quadric decimation keeps
+    /// the particles' bumps on flat fluid (it keeps shapes), and one Loop step only halves
+    /// them; this takes them out. 0 for none (0 to 100).
+    int smooth = 6;
     /// Loop subdivision steps after decimation, each 4x the triangles, rounding off the edges
     /// that decimation leaves (0 to 3).
     int subdivide = 1;

@@ -1,9 +1,10 @@
 // MeshDistance.cc - one side of the Hausdorff distance between meshes (see MeshCheck.h): exact
 // point-to-triangle distances, the candidate triangles from a sorted table of (cell, triangle)
-// for cells of the search radius, the points in parallel (the maximum is the same in any order).
+// for cells of about an edge, searched ring by ring out from the point until nothing nearer can
+// be left; the points in parallel (the maximum is the same in any order).
 #include <fluidsurf/MeshCheck.h>
 
-#include "util/Vec3d.h"
+#include "util/TriangleDistance.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -17,29 +18,6 @@
 namespace fluidsurf {
 
 namespace {
-
-double segmentDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b)
-{
-    const Vec3d ab = b - a;
-    const double len2 = ab.lengthSqr();
-    const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-    return (a + ab * t - p).length();
-}
-
-/// To the plane where p projects inside the triangle, else to the nearest side.
-double triangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c)
-{
-    const Vec3d n = (b - a).cross(c - a);
-    const double n2 = n.lengthSqr();
-    if (n2 > 0) {
-        const double h = (p - a).dot(n) / n2;
-        const Vec3d q = p - n * h;
-        if ((b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 &&
-            (a - c).cross(q - c).dot(n) >= 0)
-            return std::abs(h) * std::sqrt(n2);
-    }
-    return std::min({segmentDistance(p, a, b), segmentDistance(p, b, c), segmentDistance(p, c, a)});
-}
 
 class Buckets
 {
@@ -78,27 +56,38 @@ public:
         tbb::parallel_sort(mEntries.begin(), mEntries.end());
     }
 
-    /// Distance from p to the mesh, or +inf beyond one cell.
-    double operator()(const Vec3d& p) const
+    /// Distance from p to the mesh, or +inf beyond `reach`: the cells in rings around p's cell,
+    /// nearest ring first, until no unvisited cell can hold anything nearer (a cell k rings out
+    /// is at least (k - 1) cells away).
+    double operator()(const Vec3d& p, double reach) const
     {
         double best = std::numeric_limits<double>::infinity();
-        for (int64_t x = index(p[0] - mCell); x <= index(p[0] + mCell); ++x)
-            for (int64_t y = index(p[1] - mCell); y <= index(p[1] + mCell); ++y)
-                for (int64_t z = index(p[2] - mCell); z <= index(p[2] + mCell); ++z) {
-                    const uint64_t k = key(x, y, z);
-                    auto it = std::lower_bound(mEntries.begin(), mEntries.end(),
-                                               std::pair<uint64_t, uint32_t>(k, 0));
-                    for (; it != mEntries.end() && it->first == k; ++it) {
-                        const auto& tri = mMesh.triangles[it->second];
-                        best = std::min(best, triangleDistance(p, toVec3d(mMesh.points[tri[0]]),
-                                                               toVec3d(mMesh.points[tri[1]]),
-                                                               toVec3d(mMesh.points[tri[2]])));
-                    }
+        const int64_t c[3] = {index(p[0]), index(p[1]), index(p[2])};
+        const int64_t rings = int64_t(std::ceil(reach / mCell)) + 1;
+        for (int64_t k = 0; k <= rings && !(best <= double(k - 1) * mCell); ++k)
+            for (int64_t x = c[0] - k; x <= c[0] + k; ++x)
+                for (int64_t y = c[1] - k; y <= c[1] + k; ++y) {
+                    const bool side = std::abs(x - c[0]) == k || std::abs(y - c[1]) == k;
+                    for (int64_t z = c[2] - k; z <= c[2] + k;
+                         z += side ? 1 : 2 * std::max<int64_t>(k, 1))
+                        visit(p, key(x, y, z), best);
                 }
-        return best <= mCell ? best : std::numeric_limits<double>::infinity();
+        return best <= reach ? best : std::numeric_limits<double>::infinity();
     }
 
 private:
+    void visit(const Vec3d& p, uint64_t k, double& best) const
+    {
+        auto it =
+            std::lower_bound(mEntries.begin(), mEntries.end(), std::pair<uint64_t, uint32_t>(k, 0));
+        for (; it != mEntries.end() && it->first == k; ++it) {
+            const auto& tri = mMesh.triangles[it->second];
+            best = std::min(best, triangleDistance(p, toVec3d(mMesh.points[tri[0]]),
+                                                   toVec3d(mMesh.points[tri[1]]),
+                                                   toVec3d(mMesh.points[tri[2]])));
+        }
+    }
+
     int64_t index(double v) const { return int64_t(std::floor(v / mCell)); }
     static uint64_t key(int64_t x, int64_t y, int64_t z)
     {
@@ -116,7 +105,13 @@ double meshDistance(const TriangleMesh& a, const TriangleMesh& b, double reach)
 {
     if (a.triangles.empty()) return 0;
     if (b.triangles.empty() || !(reach > 0)) return std::numeric_limits<double>::infinity();
-    const Buckets distance(b, reach);
+    // cells of about an edge: a point's nearest triangles are then a ring or two away
+    double edges = 0;
+    for (const auto& t : b.triangles)
+        edges += (toVec3d(b.points[t[1]]) - toVec3d(b.points[t[0]])).length();
+    const double cell = std::clamp(edges / double(b.triangles.size()), reach / 16, reach);
+    const Buckets buckets(b, cell);
+    auto distance = [&](const Vec3d& p) { return buckets(p, reach); };
     return tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, a.triangles.size()), 0.0,
         [&](const tbb::blocked_range<size_t>& r, double worst) {

@@ -35,6 +35,8 @@
 #include "post/Normals.h"
 #include "post/Quadric.h"
 
+#include "util/TriangleDistance.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -144,13 +146,17 @@ public:
         mVersion.assign(nv, 0);
     }
 
-    BlockResult run(double threshold, double maxDrift, size_t budget)
+    BlockResult run(double threshold, const DecimateTarget& target, size_t budget)
     {
         BlockResult out;
-        mThreshold = threshold, mMaxDrift = maxDrift;
+        mThreshold = threshold, mMaxDrift = target.maxDrift, mMaxStep = target.maxStep;
+        std::vector<Entry> entries; // made a heap at once: cheaper than pushing one by one
+        entries.reserve(3 * mTris.size() / 2);
         for (size_t t = 0; t < mTris.size(); ++t)
             for (int k = 0; k < 3; ++k) // each inner edge once, from its lower end
-                if (mTris[t][k] < mTris[t][(k + 1) % 3]) push(mTris[t][k], mTris[t][(k + 1) % 3]);
+                if (mTris[t][k] < mTris[t][(k + 1) % 3])
+                    push(mTris[t][k], mTris[t][(k + 1) % 3], &entries);
+        mHeap = std::priority_queue<Entry>(std::less<Entry>(), std::move(entries));
         while (!mHeap.empty() && out.collapses < budget) {
             const Entry e = mHeap.top();
             mHeap.pop();
@@ -226,12 +232,14 @@ private:
         return true;
     }
 
-    void push(uint32_t a, uint32_t b)
+    void push(uint32_t a, uint32_t b, std::vector<Entry>* entries = nullptr)
     {
         if (!mOwn[a] || !mOwn[b]) return;
         if (a > b) std::swap(a, b);
         const Collapse c = bestCollapse(mS, mGlobal[a], mGlobal[b]);
-        if (c.error <= mThreshold) mHeap.push({c.error, a, b, mVersion[a], mVersion[b]});
+        if (!(c.error <= mThreshold)) return;
+        const Entry e{c.error, a, b, mVersion[a], mVersion[b]};
+        entries ? entries->push_back(e) : mHeap.push(e);
     }
 
     bool collapse(uint32_t a, uint32_t b)
@@ -247,6 +255,40 @@ private:
             opposite[nShared++] = tri[0] ^ tri[1] ^ tri[2] ^ a ^ b;
         }
         if (nShared != 2) return false;
+        const Collapse col = bestCollapse(mS, mGlobal[a], mGlobal[b]);
+        const bool stepBound = mMaxStep < std::numeric_limits<double>::infinity();
+        double drift = 0; // see State::drift
+        mAfter.clear(), mBefore.clear();
+        size_t nGone = 0;
+        for (const std::vector<uint32_t>* list : {&mTa, &mTb})
+            for (uint32_t t : *list) {
+                Vec3d before[3], after[3];
+                double corners = 0; // the plane is as far off as its corners may be
+                for (int k = 0; k < 3; ++k) {
+                    const uint32_t v = mTris[t][k];
+                    before[k] = point(v);
+                    after[k] = v == a || v == b ? col.point : before[k];
+                    corners = std::max(corners, double(mS.drift[mGlobal[v]]));
+                }
+                const Vec3d n0 = (before[1] - before[0]).cross(before[2] - before[0]);
+                const double l0 = n0.length();
+                if (l0 > 0)
+                    drift = std::max(drift, std::abs(n0.dot(col.point - before[0])) / l0 + corners);
+                const bool gone = t == shared[0] || t == shared[1];
+                if (stepBound && !(gone && list == &mTb)) { // the two that go are in both fans
+                    mBefore.push_back(
+                        {before[0], before[1], before[2], after[0], after[1], after[2]});
+                    if (gone) std::swap(mBefore.back(), mBefore[nGone++]); // first: see withinStep
+                }
+                if (gone) continue;
+                mAfter.push_back({after[0], after[1], after[2]});
+                const Vec3d n1 = (after[1] - after[0]).cross(after[2] - after[0]);
+                const double l1 = n1.length();
+                if (!(l1 > 0) || n0.dot(n1) < kMaxTurnCos * l0 * l1) return false;
+                const double q1 = quality(after[0], after[1], after[2]);
+                if (q1 < kMinQuality && q1 < quality(before[0], before[1], before[2])) return false;
+            }
+        // the topology, after the shapes: they refuse most collapses, and more cheaply
         neighbours(mTa, a, mNa);
         neighbours(mTb, b, mNb);
         size_t common = 0;
@@ -263,31 +305,8 @@ private:
             aliveTris(c, mTc);
             if (mTc.size() - 1 < (mOwn[c] ? 3u : 2u)) return false;
         }
-
-        const Collapse col = bestCollapse(mS, mGlobal[a], mGlobal[b]);
-        double drift = 0; // see State::drift
-        for (const std::vector<uint32_t>* list : {&mTa, &mTb})
-            for (uint32_t t : *list) {
-                Vec3d before[3], after[3];
-                double corners = 0; // the plane is as far off as its corners may be
-                for (int k = 0; k < 3; ++k) {
-                    const uint32_t v = mTris[t][k];
-                    before[k] = point(v);
-                    after[k] = v == a || v == b ? col.point : before[k];
-                    corners = std::max(corners, double(mS.drift[mGlobal[v]]));
-                }
-                const Vec3d n0 = (before[1] - before[0]).cross(before[2] - before[0]);
-                const double l0 = n0.length();
-                if (l0 > 0)
-                    drift = std::max(drift, std::abs(n0.dot(col.point - before[0])) / l0 + corners);
-                if (t == shared[0] || t == shared[1]) continue; // gone after the collapse
-                const Vec3d n1 = (after[1] - after[0]).cross(after[2] - after[0]);
-                const double l1 = n1.length();
-                if (!(l1 > 0) || n0.dot(n1) < kMaxTurnCos * l0 * l1) return false;
-                const double q1 = quality(after[0], after[1], after[2]);
-                if (q1 < kMinQuality && q1 < quality(before[0], before[1], before[2])) return false;
-            }
         if (drift > mMaxDrift) return false;
+        if (stepBound && !withinStep(a, b, col.point)) return false;
 
         // commit: b merges into a
         point(a) = col.point;
@@ -313,6 +332,40 @@ private:
         return true;
     }
 
+    /// DecimateTarget::maxStep: the new point p near an old triangle (one of the two the edge
+    /// leaves, as a rule), and the old surface near the new: each old end, and each old
+    /// triangle's middle (standing for the surface it covered) near a new triangle. mBefore
+    /// holds the old fan (the two that go first), before and after the move.
+    bool withinStep(uint32_t a, uint32_t b, const Vec3d& p)
+    {
+        const double bound = mMaxStep;
+        bool nearOld = false;
+        mFar.clear();
+        for (uint32_t v : {a, b}) // an end that moves less than the bound is near all new
+            if ((point(v) - p).length() <= bound)
+                nearOld = true;
+            else
+                mFar.push_back(point(v));
+        for (size_t i = 0; i < mBefore.size() && !nearOld; ++i)
+            nearOld = withinDistance(p, mBefore[i][0], mBefore[i][1], mBefore[i][2], bound);
+        if (!nearOld) return false;
+        for (const auto& t : mBefore) {
+            // near the same triangle moved, as a rule (its middle moved a third of its moving
+            // corner's way); one of the two that go is a segment of the new fan
+            const Vec3d middle = (t[0] + t[1] + t[2]) / 3.0;
+            if (((t[3] + t[4] + t[5]) / 3.0 - middle).length() > bound &&
+                !withinDistance(middle, t[3], t[4], t[5], bound))
+                mFar.push_back(middle);
+        }
+        for (const Vec3d& q : mFar) {
+            bool near = false;
+            for (size_t i = 0; i < mAfter.size() && !near; ++i)
+                near = withinDistance(q, mAfter[i][0], mAfter[i][1], mAfter[i][2], bound);
+            if (!near) return false;
+        }
+        return true;
+    }
+
     State& mS;
     std::vector<uint32_t> mGlobal; ///< local vertex -> mesh vertex, ascending
     std::vector<Tri> mTris;        ///< in local vertices
@@ -321,7 +374,10 @@ private:
                                                  ///< the end of mRefs as vertices merge)
     std::vector<uint32_t> mVersion;              ///< bumped when a vertex moves or goes
     std::priority_queue<Entry> mHeap;
-    double mThreshold = 0, mMaxDrift = 0;
+    double mThreshold = 0, mMaxDrift = 0, mMaxStep = 0;
+    std::vector<std::array<Vec3d, 3>> mAfter;      // the new fan
+    std::vector<Vec3d> mFar;                       // old points to find near the new fan
+    std::vector<std::array<Vec3d, 6>> mBefore;     // the old fan, before and after the move
     std::vector<uint32_t> mTa, mTb, mTc, mNa, mNb; // scratch
 };
 
@@ -375,7 +431,8 @@ std::vector<uint64_t> blockOrder(const State& s, double side, double shift)
 
 } // namespace
 
-TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target, DecimateStats* stats)
+TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target, DecimateStats* stats,
+                      std::vector<uint32_t>* kept)
 {
     DecimateStats st;
     State s = makeState(mesh);
@@ -475,7 +532,7 @@ TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target, De
                                   }
                                   Block block(s, &tris[blockStart[b]],
                                               blockStart[b + 1] - blockStart[b], valence);
-                                  results[b] = block.run(threshold, target.maxDrift, budget[b]);
+                                  results[b] = block.run(threshold, target, budget[b]);
                               }
                           });
         size_t collapses = 0;
@@ -504,6 +561,7 @@ TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target, De
     // the result: used points in their old order
     TriangleMesh out;
     std::vector<uint32_t> index(s.points.size(), UINT32_MAX);
+    if (kept) kept->clear();
     for (const Tri& t : s.triangles)
         for (uint32_t v : t)
             index[v] = 0;
@@ -511,6 +569,7 @@ TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target, De
         if (index[v] == 0) {
             index[v] = uint32_t(out.points.size());
             out.points.push_back(toVec3f(s.points[v] + s.middle));
+            if (kept) kept->push_back(uint32_t(v));
         }
     out.triangles.reserve(s.triangles.size());
     for (const Tri& t : s.triangles)

@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <limits>
+#include <vector>
 
 namespace fluidsurf {
 namespace post {
@@ -24,6 +25,10 @@ struct DecimateTarget
     /// (world units): each vertex carries a bound, its ends' larger bound plus the new point's
     /// largest distance to the planes of the triangles the collapse replaces.
     double maxDrift = std::numeric_limits<double>::infinity();
+    /// Collapse nothing that moves the surface locally by more than this (world units): the
+    /// new point must lie this close to a triangle it replaces, and each old end this close
+    /// to a new triangle.
+    double maxStep = std::numeric_limits<double>::infinity();
 };
 
 struct DecimateStats
@@ -37,9 +42,10 @@ struct DecimateStats
 
 /// mesh decimated to target, with angle-weighted normals. Vertices on an open border, on a
 /// non-manifold edge or of a non-manifold fan never move, so whatever was open or non-manifold
-/// stays as it was. Points not used by the result are dropped.
+/// stays as it was. Points not used by the result are dropped; `kept`, if given, gets each
+/// result point's index in mesh (the points a collapse merged keep the index of one end).
 TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target,
-                      DecimateStats* stats = nullptr);
+                      DecimateStats* stats = nullptr, std::vector<uint32_t>* kept = nullptr);
 
 } // namespace post
 } // namespace fluidsurf

@@ -31,6 +31,14 @@ struct Side
     }
 };
 
+/// `to`, or the point maxMove from `from` on the way there.
+Vec3d bounded(const Vec3d& from, const Vec3d& to, double maxMove)
+{
+    const Vec3d d = to - from;
+    const double len = d.length();
+    return len > maxMove ? from + d * (maxMove / len) : to;
+}
+
 /// Loop's weight of each of n neighbours of a smooth point.
 double beta(size_t n)
 {
@@ -40,7 +48,7 @@ double beta(size_t n)
 
 } // namespace
 
-TriangleMesh loopSubdivide(const TriangleMesh& in)
+TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
 {
     const size_t nv = in.points.size(), nt = in.triangles.size();
     std::vector<Side> sides(3 * nt);
@@ -98,7 +106,8 @@ TriangleMesh loopSubdivide(const TriangleMesh& in)
             else if (creases == 2)
                 out.points[v] = toVec3f(p * 0.75 + along / 8);
             else
-                out.points[v] = toVec3f(p * (1 - double(n) * beta(n)) + around * beta(n));
+                out.points[v] =
+                    toVec3f(bounded(p, p * (1 - double(n) * beta(n)) + around * beta(n), maxMove));
         }
     });
     tbb::parallel_for(tbb::blocked_range<size_t>(0, ne), [&](const tbb::blocked_range<size_t>& r) {
@@ -112,7 +121,8 @@ TriangleMesh loopSubdivide(const TriangleMesh& in)
             Vec3d opposite(0.0); // the two corners facing the edge
             for (uint32_t i = first[e]; i < first[e + 1]; ++i)
                 opposite += toVec3d(in.points[in.triangles[sides[i].tri][(sides[i].k + 2) % 3]]);
-            out.points[nv + e] = toVec3f(ends * (3.0 / 8) + opposite / 8);
+            out.points[nv + e] =
+                toVec3f(bounded(ends * 0.5, ends * (3.0 / 8) + opposite / 8, maxMove));
         }
     });
     out.triangles.resize(4 * nt);

@@ -4,6 +4,8 @@
 
 #include <fluidsurf/Mesh.h>
 
+#include <limits>
+
 namespace fluidsurf {
 namespace post {
 
@@ -14,7 +16,13 @@ namespace post {
 /// B-spline along them, corners rounded like the rest (a point on other than two creases stays).
 /// Old points keep their indices, edge points follow in edge order; normals are recomputed
 /// (angle-weighted). The same bits for any thread count.
-TriangleMesh loopSubdivide(const TriangleMesh& mesh);
+///
+/// maxMove (world units) bounds how far a point moves from where it is, or an edge point from
+/// its edge's middle: Loop's limit surface lies inside a convex mesh, and on a tip of a voxel's
+/// radius the plain rules pull the point in by more than half a voxel (measured on the real
+/// frames); on flat fluid the moves are far below any useful bound, so the rounding off stays.
+TriangleMesh loopSubdivide(const TriangleMesh& mesh,
+                           double maxMove = std::numeric_limits<double>::infinity());
 
 } // namespace post
 } // namespace fluidsurf

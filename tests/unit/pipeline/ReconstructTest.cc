@@ -35,7 +35,7 @@ TEST(Reconstruct, EqualsItsTwoHalvesAndIsWatertight)
     Context ctx;
     ReconstructParams params = ReconstructParams::fromRadius(sp.radius);
     params.post.isolated = IsolatedMode::Drop; // the two halves alone; spheres: the next test
-    params.post.decimate = 0, params.post.subdivide = 0; // the raw mesh; post: further down
+    params.post.decimate = 0, params.post.smooth = 0, params.post.subdivide = 0; // raw
     const ReconstructResult res = reconstruct(ps, params, ctx, "drop");
     const RasterizeResult half = rasterizeParticles(ps, Params::fromRadius(sp.radius), "drop");
     EXPECT_EQ(res.levelSet->activeVoxelCount(), half.grid->activeVoxelCount());
@@ -119,11 +119,11 @@ TEST(Reconstruct, PostProcessingComesBeforeTheSpheres)
     const ParticleSet ps = generateScene(Scene::Drop, sp);
     ReconstructParams raw = ReconstructParams::fromRadius(sp.radius);
     raw.post.isolated = IsolatedMode::Drop;
-    raw.post.decimate = 0, raw.post.subdivide = 0;
+    raw.post.decimate = 0, raw.post.smooth = 0, raw.post.subdivide = 0;
     Context a, b, c;
     const ReconstructResult plain = reconstruct(ps, raw, a);
     const ReconstructResult res = reconstruct(ps, ReconstructParams::fromRadius(sp.radius), b);
-    // the defaults: 80% decimated, one Loop step, the error bound counted in the grid's voxels
+    // the defaults: 80% decimated, smoothed, one Loop step, the bounds counted in its voxels
     PostProcessParams post;
     post.voxelSize = plain.levelSet->voxelSize()[0];
     const TriangleMesh smooth = postProcessMesh(plain.mesh, post, c);
@@ -150,8 +150,9 @@ TEST(Reconstruct, TimingTreeNestsTheStages)
     ctx.timing().finish();
     const TimingTree& t = ctx.timing();
     const auto& nodes = t.nodes();
-    // Top level: rasterize, mesh, then post (decimate and subdivide; no spheres: a ball has
-    // no isolated particles); the field's stages nest inside rasterize.
+    // Top level: rasterize, mesh, then post (its steps between the volumes taken and given
+    // back; no spheres: a ball has no isolated particles); the field's stages nest inside
+    // rasterize.
     ASSERT_EQ(t.root().children.size(), 3u);
     EXPECT_EQ(nodes[t.root().children[0]].name, "rasterize");
     EXPECT_EQ(nodes[t.root().children[1]].name, "mesh");
@@ -159,7 +160,8 @@ TEST(Reconstruct, TimingTreeNestsTheStages)
     std::vector<std::string> post;
     for (size_t c : nodes[t.root().children[2]].children)
         post.push_back(nodes[c].name);
-    EXPECT_EQ(post, (std::vector<std::string>{"decimate", "subdivide"}));
+    EXPECT_EQ(post,
+              (std::vector<std::string>{"volumes", "decimate", "smooth", "subdivide", "volumes"}));
     std::vector<std::string> inner;
     double sum = 0;
     for (size_t c : nodes[t.root().children[0]].children)

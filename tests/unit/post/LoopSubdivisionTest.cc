@@ -111,5 +111,38 @@ TEST(LoopSubdivision, SurfaceStaysWatertightAndThreadCountDoesNotMatter)
     EXPECT_EQ(one.normals, s.normals);
 }
 
+TEST(LoopSubdivision, MoveBoundHoldsATipAndLeavesTheRestAlone)
+{
+    TriangleMesh spiky = post::unitIcosphere(2);
+    spiky.points[0] = spiky.points[0] * 1.5f; // a tip half a radius out
+    const double bound = 0.02;
+    const TriangleMesh free = post::loopSubdivide(spiky);
+    const TriangleMesh held = post::loopSubdivide(spiky, bound);
+    ASSERT_EQ(held.triangles, free.triangles);
+    // unbounded, the tip is pulled well in; bounded, by exactly the bound
+    EXPECT_GT(length(free.points[0] - spiky.points[0]), 5 * bound);
+    EXPECT_NEAR(length(held.points[0] - spiky.points[0]), bound, 1e-6);
+    // every old point within the bound of where it was; where Loop moved it less, the same
+    const size_t nv = spiky.points.size();
+    size_t same = 0;
+    for (size_t v = 0; v < nv; ++v) {
+        EXPECT_LE(length(held.points[v] - spiky.points[v]), bound + 1e-6) << v;
+        same += held.points[v] == free.points[v];
+    }
+    EXPECT_GT(same, nv / 2); // far from the tip the sphere's own moves are under the bound
+    // every edge point within the bound of its edge's middle: each new point is the middle
+    // of the two old points whose triangles' middle children it is a corner of
+    for (size_t t = 0; t < spiky.triangles.size(); ++t) {
+        const auto& [a, b, c] = spiky.triangles[t];
+        const uint32_t ab = held.triangles[4 * t][1], ca = held.triangles[4 * t][2];
+        EXPECT_LE(length(held.points[ab] - (spiky.points[a] + spiky.points[b]) * 0.5f),
+                  bound + 1e-6);
+        EXPECT_LE(length(held.points[ca] - (spiky.points[c] + spiky.points[a]) * 0.5f),
+                  bound + 1e-6);
+    }
+    // a bound nothing reaches: the plain step, bit for bit
+    EXPECT_EQ(post::loopSubdivide(spiky, 10.0).points, free.points);
+}
+
 } // namespace
 } // namespace fluidsurf

@@ -1,0 +1,158 @@
+// Volumes.cc - components and their volumes, and giving volumes back (see Volumes.h).
+//
+// Sums per component run over fixed chunks of triangles in parallel, each chunk summing runs of
+// triangles of one component in order, and the runs are added up in chunk order: the same
+// sums for any thread count. Volumes are taken about the mesh's first point, not the origin:
+// a frame far from the origin would otherwise add and cancel large terms.
+#include "post/Volumes.h"
+
+#include "post/Normals.h"
+
+#include "util/Vec3d.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include <algorithm>
+#include <numeric>
+
+namespace fluidsurf {
+namespace post {
+
+namespace {
+
+constexpr size_t kChunk = size_t(1) << 15; ///< triangles per chunk of the sums
+
+uint32_t root(std::vector<uint32_t>& parent, uint32_t v)
+{
+    while (parent[v] != v)
+        v = parent[v] = parent[parent[v]];
+    return v;
+}
+
+/// Per component (by its first corner's), the triangles' signed volume and, if `area`, area.
+void sums(const TriangleMesh& mesh, const std::vector<uint32_t>& ofPoint, size_t count,
+          std::vector<double>& volume, std::vector<double>* area)
+{
+    struct Run
+    {
+        uint32_t component;
+        double volume, area;
+    };
+    const size_t nt = mesh.triangles.size(), chunks = (nt + kChunk - 1) / kChunk;
+    const Vec3d o = mesh.points.empty() ? Vec3d(0.0) : toVec3d(mesh.points[0]);
+    std::vector<std::vector<Run>> runs(chunks);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, chunks, 1),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t c = r.begin(); c != r.end(); ++c)
+                              for (size_t t = c * kChunk; t < std::min(nt, (c + 1) * kChunk); ++t) {
+                                  const auto& tri = mesh.triangles[t];
+                                  const Vec3d a = toVec3d(mesh.points[tri[0]]) - o,
+                                              b = toVec3d(mesh.points[tri[1]]) - o,
+                                              d = toVec3d(mesh.points[tri[2]]) - o;
+                                  const uint32_t k = ofPoint[tri[0]];
+                                  if (runs[c].empty() || runs[c].back().component != k)
+                                      runs[c].push_back({k, 0.0, 0.0});
+                                  runs[c].back().volume += a.dot(b.cross(d)) / 6;
+                                  if (area)
+                                      runs[c].back().area += (b - a).cross(d - a).length() / 2;
+                              }
+                      });
+    volume.assign(count, 0.0);
+    if (area) area->assign(count, 0.0);
+    for (const auto& chunk : runs)
+        for (const Run& run : chunk) {
+            volume[run.component] += run.volume;
+            if (area) (*area)[run.component] += run.area;
+        }
+}
+
+} // namespace
+
+Components findComponents(const TriangleMesh& mesh)
+{
+    const size_t nv = mesh.points.size();
+    std::vector<uint32_t> parent(nv);
+    std::iota(parent.begin(), parent.end(), 0u);
+    std::vector<uint8_t> used(nv, 0);
+    for (const auto& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) {
+            used[t[k]] = 1;
+            const uint32_t a = root(parent, t[k]), b = root(parent, t[(k + 1) % 3]);
+            if (a != b) parent[std::max(a, b)] = std::min(a, b); // the lowest point is the root
+        }
+    Components c;
+    c.ofPoint.assign(nv, kNoComponent);
+    std::vector<uint32_t> number(nv, kNoComponent);
+    uint32_t count = 0;
+    for (uint32_t v = 0; v < nv; ++v) {
+        if (!used[v]) continue;
+        const uint32_t r = root(parent, v);
+        if (number[r] == kNoComponent) number[r] = count++;
+        c.ofPoint[v] = number[r];
+    }
+    sums(mesh, c.ofPoint, count, c.volume, nullptr);
+    return c;
+}
+
+void markClosed(Components& c, const TriangleMesh& mesh, const std::vector<uint32_t>& ofPoint)
+{
+    c.closed.assign(c.volume.size(), 1);
+    std::vector<uint64_t> sides(3 * mesh.triangles.size()); // undirected, once per triangle
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.triangles.size()),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t t = r.begin(); t != r.end(); ++t)
+                              for (int k = 0; k < 3; ++k) {
+                                  const uint64_t a = mesh.triangles[t][k],
+                                                 b = mesh.triangles[t][(k + 1) % 3];
+                                  sides[3 * t + k] = std::min(a, b) << 32 | std::max(a, b);
+                              }
+                      });
+    tbb::parallel_sort(sides.begin(), sides.end());
+    for (size_t i = 0; i < sides.size();) {
+        size_t j = i;
+        while (j < sides.size() && sides[j] == sides[i])
+            ++j;
+        if (j - i != 2) c.closed[ofPoint[uint32_t(sides[i])]] = 0;
+        i = j;
+    }
+}
+
+void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Components& before,
+                    double maxOffset)
+{
+    const size_t nv = mesh.points.size(), count = before.volume.size();
+    ofPoint.resize(nv, kNoComponent);
+    bool missing = true; // new points: a triangle neighbour's component (one pass after Loop)
+    for (int pass = 0; pass < 8 && missing; ++pass) {
+        missing = false;
+        for (const auto& t : mesh.triangles) {
+            uint32_t label = std::min({ofPoint[t[0]], ofPoint[t[1]], ofPoint[t[2]]});
+            for (uint32_t v : t)
+                if (ofPoint[v] == kNoComponent)
+                    ofPoint[v] = label, missing |= label == kNoComponent;
+        }
+    }
+    if (missing) { // not from those components after all: leave it
+        computeAngleWeightedNormals(mesh);
+        return;
+    }
+    if (mesh.normals.size() != nv) computeAngleWeightedNormals(mesh);
+    std::vector<double> volume, area;
+    sums(mesh, ofPoint, count, volume, &area);
+    std::vector<float> offset(count, 0.f);
+    for (size_t c = 0; c < count; ++c)
+        if (before.closed.size() == count && before.closed[c] && area[c] > 0)
+            offset[c] =
+                float(std::clamp((before.volume[c] - volume[c]) / area[c], -maxOffset, maxOffset));
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t v = r.begin(); v != r.end(); ++v)
+            if (ofPoint[v] != kNoComponent)
+                mesh.points[v] = mesh.points[v] + mesh.normals[v] * offset[ofPoint[v]];
+    });
+    computeAngleWeightedNormals(mesh);
+}
+
+} // namespace post
+} // namespace fluidsurf
