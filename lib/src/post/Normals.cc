@@ -15,20 +15,26 @@
 namespace fluidsurf {
 namespace post {
 
-void computeAngleWeightedNormals(TriangleMesh& mesh)
+VertexTriangles::VertexTriangles(const TriangleMesh& mesh)
 {
-    const size_t nv = mesh.points.size(), nt = mesh.triangles.size();
-    // vertex -> triangles, in triangle order
-    std::vector<uint32_t> start(nv + 1, 0), corner(3 * nt);
+    start.assign(mesh.points.size() + 1, 0);
     for (const auto& t : mesh.triangles)
         for (uint32_t v : t)
             ++start[v + 1];
-    for (size_t v = 0; v < nv; ++v)
+    for (size_t v = 0; v + 1 < start.size(); ++v)
         start[v + 1] += start[v];
+    tris.resize(start.back());
     std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-    for (size_t t = 0; t < nt; ++t)
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
         for (uint32_t v : mesh.triangles[t])
-            corner[fill[v]++] = uint32_t(t);
+            tris[fill[v]++] = uint32_t(t);
+}
+
+void computeAngleWeightedNormals(TriangleMesh& mesh)
+{
+    const size_t nv = mesh.points.size();
+    const VertexTriangles around(mesh);
+    const std::vector<uint32_t>&start = around.start, &corner = around.tris;
     mesh.normals.assign(nv, Vec3f(0, 0, 0));
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {

@@ -5,8 +5,20 @@
 
 #include <fluidsurf/Mesh.h>
 
+#include <cstdint>
+#include <vector>
+
 namespace fluidsurf {
 namespace post {
+
+/// Each vertex's triangles, in triangle order (a table built by counting): what per-vertex sums
+/// over triangles gather from, in the same order on every run.
+struct VertexTriangles
+{
+    std::vector<uint32_t> start; ///< vertex v's triangles are tris[start[v], start[v + 1])
+    std::vector<uint32_t> tris;
+    explicit VertexTriangles(const TriangleMesh& mesh);
+};
 
 /// mesh.normals from the triangles around each vertex, each weighted by its angle at the vertex
 /// (Thürmer and Wüthrich 1998): unlike area weights, this does not depend on how a flat region

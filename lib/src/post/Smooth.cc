@@ -23,26 +23,6 @@ namespace {
 
 constexpr double kLambda = 0.5, kMu = -0.5;
 
-/// The vertex -> triangle table (in triangle order) that normals are gathered with.
-struct Corners
-{
-    std::vector<uint32_t> start, tris;
-    Corners(const TriangleMesh& mesh)
-    {
-        start.assign(mesh.points.size() + 1, 0);
-        for (const auto& t : mesh.triangles)
-            for (uint32_t v : t)
-                ++start[v + 1];
-        for (size_t v = 0; v + 1 < start.size(); ++v)
-            start[v + 1] += start[v];
-        tris.resize(start.back());
-        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        for (size_t t = 0; t < mesh.triangles.size(); ++t)
-            for (uint32_t v : mesh.triangles[t])
-                tris[fill[v]++] = uint32_t(t);
-    }
-};
-
 } // namespace
 
 TriangleMesh smoothAlongNormals(const TriangleMesh& mesh, int iterations, double maxMove)
@@ -77,7 +57,7 @@ TriangleMesh smoothAlongNormals(const TriangleMesh& mesh, int iterations, double
     for (size_t v = 0; v < nv; ++v)
         start[v + 1] += start[v];
 
-    const Corners corners(mesh);
+    const VertexTriangles corners(mesh);
     std::vector<Vec3d> from(nv), p(nv), next(nv);
     for (size_t v = 0; v < nv; ++v)
         from[v] = p[v] = toVec3d(mesh.points[v]);
