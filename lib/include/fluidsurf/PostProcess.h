@@ -1,5 +1,6 @@
 // PostProcess.h - mesh post-processing (thesis chapter 5) on any triangle mesh: quadric-error
-// decimation, then Loop subdivision, with angle-weighted normals after each step. reconstruct()
+// decimation, smoothing, then Loop subdivision; the result carries the angle-weighted normals of
+// its own surface (computed once, after the last step: no step reads them). reconstruct()
 // runs it on the surface it meshed and then adds isolated particles as spheres (they need the
 // particles); `fluidsurf post` runs it on a mesh file.
 #pragma once

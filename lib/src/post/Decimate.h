@@ -40,7 +40,7 @@ struct DecimateStats
     size_t refused = 0;   ///< collapses a guard refused
 };
 
-/// mesh decimated to target, with angle-weighted normals. Vertices on an open border, on a
+/// mesh decimated to target, without normals (see Normals.h). Vertices on an open border, on a
 /// non-manifold edge or of a non-manifold fan never move, so whatever was open or non-manifold
 /// stays as it was. Points not used by the result are dropped; `kept`, if given, gets each
 /// result point's index in mesh (the points a collapse merged keep the index of one end).

@@ -6,8 +6,6 @@
 // a fixed list of inputs summed in a fixed order.
 #include "post/LoopSubdivision.h"
 
-#include "post/Normals.h"
-
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
@@ -137,8 +135,7 @@ TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
             out.triangles[4 * t + 3] = {ab, bc, ca};
         }
     });
-    computeAngleWeightedNormals(out);
-    return out;
+    return out; // without normals: see Normals.h
 }
 
 } // namespace post

@@ -14,8 +14,8 @@ namespace post {
 /// neighbours with Loop's weight beta(n). Edges of one triangle (a boundary) or of three or more
 /// (non-manifold) are creases: their new points are midpoints and their points follow the cubic
 /// B-spline along them, corners rounded like the rest (a point on other than two creases stays).
-/// Old points keep their indices, edge points follow in edge order; normals are recomputed
-/// (angle-weighted). The same bits for any thread count.
+/// Old points keep their indices, edge points follow in edge order; no normals (Normals.h).
+/// The same bits for any thread count.
 ///
 /// maxMove (world units) bounds how far a point moves from where it is, or an edge point from
 /// its edge's middle: Loop's limit surface lies inside a convex mesh, and on a tip of a voxel's

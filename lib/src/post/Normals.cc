@@ -32,8 +32,12 @@ VertexTriangles::VertexTriangles(const TriangleMesh& mesh)
 
 void computeAngleWeightedNormals(TriangleMesh& mesh)
 {
+    computeAngleWeightedNormals(mesh, VertexTriangles(mesh));
+}
+
+void computeAngleWeightedNormals(TriangleMesh& mesh, const VertexTriangles& around)
+{
     const size_t nv = mesh.points.size();
-    const VertexTriangles around(mesh);
     const std::vector<uint32_t>&start = around.start, &corner = around.tris;
     mesh.normals.assign(nv, Vec3f(0, 0, 0));
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
@@ -56,6 +60,27 @@ void computeAngleWeightedNormals(TriangleMesh& mesh)
                     Vec3f(float(sum[0] / len), float(sum[1] / len), float(sum[2] / len));
         }
     });
+}
+
+void AreaNormals::compute(const std::vector<Vec3d>& p)
+{
+    const auto& tris = mMesh.triangles;
+    mCross.resize(tris.size());
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, tris.size()), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t t = r.begin(); t != r.end(); ++t)
+                mCross[t] = (p[tris[t][1]] - p[tris[t][0]]).cross(p[tris[t][2]] - p[tris[t][0]]);
+        });
+    mNormals.resize(p.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size()),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t v = r.begin(); v != r.end(); ++v) {
+                              Vec3d n(0.0);
+                              for (uint32_t i = mAround.start[v]; i < mAround.start[v + 1]; ++i)
+                                  n += mCross[mAround.tris[i]];
+                              mNormals[v] = n;
+                          }
+                      });
 }
 
 } // namespace post

@@ -1,8 +1,6 @@
 // OpenMeshDecimate.cc - OpenMesh's quadric decimater on our mesh arrays (see OpenMeshDecimate.h).
 #include "post/OpenMeshDecimate.h"
 
-#include "post/Normals.h"
-
 #include <fluidsurf/Error.h>
 
 // OpenMesh 9's property containers trip GCC 12's -Wmaybe-uninitialized inside their own
@@ -68,8 +66,7 @@ TriangleMesh decimateOpenMesh(const TriangleMesh& in, size_t targetTriangles)
             t[k++] = uint32_t(v.idx());
         out.triangles.push_back(t);
     }
-    computeAngleWeightedNormals(out);
-    return out;
+    return out; // without normals: see Normals.h
 }
 
 } // namespace post

@@ -12,7 +12,7 @@ namespace post {
 /// OpenMesh's DecimaterT with ModQuadric (Garland-Heckbert error, no bound) and
 /// ModNormalFlipping (no collapse turns a face over), collapsing edges, cheapest first, until
 /// at most targetTriangles remain (fewer legal collapses stop it earlier). The result is compact
-/// (no unused vertices) with angle-weighted normals. ValueError for a mesh OpenMesh cannot take
+/// (no unused vertices), without normals (Normals.h). ValueError for a mesh OpenMesh cannot take
 /// (a non-manifold triangle).
 TriangleMesh decimateOpenMesh(const TriangleMesh& mesh, size_t targetTriangles);
 

@@ -58,21 +58,19 @@ TriangleMesh smoothAlongNormals(const TriangleMesh& mesh, int iterations, double
         start[v + 1] += start[v];
 
     const VertexTriangles corners(mesh);
+    AreaNormals normals(mesh, corners); // cheap, and only their directions matter here
     std::vector<Vec3d> from(nv), p(nv), next(nv);
     for (size_t v = 0; v < nv; ++v)
         from[v] = p[v] = toVec3d(mesh.points[v]);
     for (int step = 0; step < 2 * iterations; ++step) {
         const double f = step % 2 ? kMu : kLambda;
+        normals.compute(p);
         tbb::parallel_for(
             tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
                 for (size_t v = r.begin(); v != r.end(); ++v) {
                     next[v] = p[v];
                     if (fixed[v] || start[v] == start[v + 1]) continue;
-                    Vec3d n(0.0); // area-weighted: cheap, and only its direction matters here
-                    for (uint32_t i = corners.start[v]; i < corners.start[v + 1]; ++i) {
-                        const auto& t = mesh.triangles[corners.tris[i]];
-                        n += (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
-                    }
+                    Vec3d n = normals.normals()[v];
                     const double len = n.length();
                     if (!(len > 0)) continue;
                     n /= len;
@@ -90,7 +88,7 @@ TriangleMesh smoothAlongNormals(const TriangleMesh& mesh, int iterations, double
     }
     for (size_t v = 0; v < nv; ++v)
         out.points[v] = toVec3f(p[v]);
-    computeAngleWeightedNormals(out);
+    out.normals.clear(); // see Normals.h
     return out;
 }
 

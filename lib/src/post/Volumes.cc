@@ -138,7 +138,6 @@ void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Com
         computeAngleWeightedNormals(mesh);
         return;
     }
-    if (mesh.normals.size() != nv) computeAngleWeightedNormals(mesh);
     std::vector<double> volume, area;
     sums(mesh, ofPoint, count, volume, &area);
     std::vector<float> offset(count, 0.f);
@@ -146,12 +145,28 @@ void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Com
         if (before.closed.size() == count && before.closed[c] && area[c] > 0)
             offset[c] =
                 float(std::clamp((before.volume[c] - volume[c]) / area[c], -maxOffset, maxOffset));
+    // along area-weighted normals: a direction is all a first-order offset needs, and they
+    // cost no angles (the mesh's own, angle-weighted, come after the move)
+    const VertexTriangles around(mesh);
+    AreaNormals normals(mesh, around);
+    {
+        std::vector<Vec3d> p(nv);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, nv),
+                          [&](const tbb::blocked_range<size_t>& r) {
+                              for (size_t v = r.begin(); v != r.end(); ++v)
+                                  p[v] = toVec3d(mesh.points[v]);
+                          });
+        normals.compute(p);
+    }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t v = r.begin(); v != r.end(); ++v)
-            if (ofPoint[v] != kNoComponent)
-                mesh.points[v] = mesh.points[v] + mesh.normals[v] * offset[ofPoint[v]];
+        for (size_t v = r.begin(); v != r.end(); ++v) {
+            const double len = normals.normals()[v].length();
+            if (ofPoint[v] != kNoComponent && len > 0)
+                mesh.points[v] = toVec3f(toVec3d(mesh.points[v]) +
+                                         normals.normals()[v] * (offset[ofPoint[v]] / len));
+        }
     });
-    computeAngleWeightedNormals(mesh);
+    computeAngleWeightedNormals(mesh, around);
 }
 
 } // namespace post

@@ -36,7 +36,7 @@ void markClosed(Components& c, const TriangleMesh& mesh, const std::vector<uint3
 /// kNoComponent for points the steps added, which get the component of a triangle neighbour):
 /// moves the points of each component that is closed in `before` along their normals by the
 /// one offset that gives back its old volume (to first order), at most maxOffset (world units).
-/// Normals are recomputed.
+/// Ends the chain: mesh gets its angle-weighted normals (see Normals.h).
 void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Components& before,
                     double maxOffset);
 

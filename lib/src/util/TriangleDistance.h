@@ -32,29 +32,51 @@ inline double triangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, c
     return std::min({segmentDistance(p, a, b), segmentDistance(p, b, c), segmentDistance(p, c, a)});
 }
 
-/// triangleDistance(p, a, b, c) <= bound, with squares and early outs: far from the plane
-/// means far from the triangle, and any near side will do.
+/// A triangle set up for many questions "is p within a distance of it?" (the decimation's step
+/// guard asks each of its fans dozens): its plane and its barycentric solve are prepared once,
+/// so that a question costs a few dot products where the point projects inside, as a rule.
+class NearTriangle
+{
+public:
+    NearTriangle() = default;
+    NearTriangle(const Vec3d& a, const Vec3d& b, const Vec3d& c)
+        : mA(a), mE0(b - a), mE1(c - a), mN(mE0.cross(mE1))
+    {
+        mD00 = mE0.lengthSqr(), mD01 = mE0.dot(mE1), mD11 = mE1.lengthSqr();
+        mN2 = mN.lengthSqr(); // = mD00 mD11 - mD01^2, the barycentric solve's determinant
+    }
+
+    /// triangleDistance(p, a, b, c) <= sqrt(bound2), with squares and early outs: far from
+    /// the plane means far from the triangle, and any near side will do.
+    bool within(const Vec3d& p, double bound2) const
+    {
+        const Vec3d w = p - mA;
+        if (mN2 > 0) {
+            const double h = w.dot(mN);
+            if (h * h > bound2 * mN2) return false;
+            const double d0 = w.dot(mE0), d1 = w.dot(mE1); // the projection's, as well
+            const double u = mD11 * d0 - mD01 * d1, v = mD00 * d1 - mD01 * d0;
+            if (u >= 0 && v >= 0 && u + v <= mN2) return true;
+        }
+        auto side2 = [&](const Vec3d& from, const Vec3d& along) { // w relative to `from`
+            const double len2 = along.lengthSqr();
+            const double t = len2 > 0 ? std::clamp(from.dot(along) / len2, 0.0, 1.0) : 0.0;
+            return (from - along * t).lengthSqr();
+        };
+        return side2(w, mE0) <= bound2 || side2(w, mE1) <= bound2 ||
+               side2(w - mE0, mE1 - mE0) <= bound2;
+    }
+
+private:
+    Vec3d mA{0.0}, mE0{0.0}, mE1{0.0}, mN{0.0};
+    double mD00 = 0, mD01 = 0, mD11 = 0, mN2 = 0;
+};
+
+/// triangleDistance(p, a, b, c) <= bound, for one question (see NearTriangle for many).
 inline bool withinDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c,
                            double bound)
 {
-    const double bound2 = bound * bound;
-    const Vec3d n = (b - a).cross(c - a);
-    const double n2 = n.lengthSqr();
-    if (n2 > 0) {
-        const double h = (p - a).dot(n);
-        if (h * h > bound2 * n2) return false;
-        const Vec3d q = p - n * (h / n2);
-        if ((b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 &&
-            (a - c).cross(q - c).dot(n) >= 0)
-            return true;
-    }
-    auto side2 = [&](const Vec3d& u, const Vec3d& v) {
-        const Vec3d uv = v - u;
-        const double len2 = uv.lengthSqr();
-        const double t = len2 > 0 ? std::clamp((p - u).dot(uv) / len2, 0.0, 1.0) : 0.0;
-        return (u + uv * t - p).lengthSqr();
-    };
-    return side2(a, b) <= bound2 || side2(b, c) <= bound2 || side2(c, a) <= bound2;
+    return NearTriangle(a, b, c).within(p, bound * bound);
 }
 
 } // namespace fluidsurf

@@ -72,10 +72,9 @@ TEST(LoopSubdivision, FlatPatchStaysFlatWithStraightBorders)
     const MeshReport r = checkMesh(s);
     EXPECT_EQ(r.nonManifoldEdges + r.misorientedEdges + r.degenerateTriangles, 0u) << describe(r);
     EXPECT_EQ(r.boundaryEdges, 2 * 16u); // each border edge halved
-    for (size_t i = 0; i < s.points.size(); ++i) {
+    for (size_t i = 0; i < s.points.size(); ++i)
         EXPECT_EQ(s.points[i].z, 0.f);
-        EXPECT_NEAR(s.normals[i].z, 1.0f, 1e-6);
-    }
+    EXPECT_TRUE(s.normals.empty()); // the chain's last step computes them (post/Normals.h)
     // the border follows its cubic B-spline, 3/4 p + 1/8 (two border neighbours): straight
     // stretches stay on their line, corners are rounded like the rest of it
     for (const Vec3f& p : s.points)
@@ -108,7 +107,6 @@ TEST(LoopSubdivision, SurfaceStaysWatertightAndThreadCountDoesNotMatter)
     }
     EXPECT_EQ(one.points, s.points);
     EXPECT_EQ(one.triangles, s.triangles);
-    EXPECT_EQ(one.normals, s.normals);
 }
 
 TEST(LoopSubdivision, MoveBoundHoldsATipAndLeavesTheRestAlone)

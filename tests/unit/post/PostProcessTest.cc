@@ -4,6 +4,8 @@
 // mesh, both ways, and encloses its volume within 1%.
 #include "TestData.h"
 
+#include "post/Normals.h"
+
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/PostProcess.h>
 #include <fluidsurf/Reconstruct.h>
@@ -103,6 +105,36 @@ TEST(PostProcess, JitteredSlabTopComesOutFlatterWithFewerTriangles)
                 before.rms, after.rms, 100 * after.rms / before.rms, before.degrees, after.degrees,
                 100 * after.degrees / before.degrees, raw.mesh.triangles.size(),
                 post.triangles.size());
+}
+
+TEST(PostProcess, ResultCarriesTheAngleWeightedNormalsOfItsOwnSurface)
+{
+    // the steps leave normals to the end of the chain (post/Normals.h): whichever steps run,
+    // the result's normals are those of its own final points, bit for bit, and point outward
+    SceneParams sp;
+    sp.count = 8000;
+    const ParticleSet ps = generateScene(Scene::Ball, sp);
+    Context ctx;
+    const ReconstructResult raw = reconstruct(ps, rawParams(sp.radius), ctx);
+    Vec3f centre(0, 0, 0);
+    for (const Vec3f& p : raw.mesh.points)
+        centre = centre + p * (1.f / float(raw.mesh.points.size()));
+    PostProcessParams all, decimateOnly, smoothOnly, loopOnly;
+    decimateOnly.smooth = 0, decimateOnly.subdivide = 0;
+    smoothOnly.decimate = 0, smoothOnly.subdivide = 0;
+    loopOnly.decimate = 0, loopOnly.smooth = 0;
+    for (PostProcessParams p : {all, decimateOnly, smoothOnly, loopOnly}) {
+        p.voxelSize = raw.levelSet->voxelSize()[0];
+        const TriangleMesh post = postProcessMesh(raw.mesh, p, ctx);
+        TriangleMesh fresh = post;
+        fresh.normals.clear();
+        post::computeAngleWeightedNormals(fresh);
+        ASSERT_EQ(post.normals, fresh.normals);
+        for (size_t v = 0; v < post.points.size(); ++v) {
+            const Vec3d out = toVec3d(post.points[v] - centre);
+            ASSERT_GT(out.dot(toVec3d(post.normals[v])), 0.5 * out.length()) << v;
+        }
+    }
 }
 
 TEST(PostProcess, RealFramesStayWithinHalfAVoxelOfTheRawMesh)

@@ -54,12 +54,7 @@ TEST(Smooth, BumpySphereComesOutRounderWithinTheBound)
     const MeshReport before = checkMesh(bumpy), after = checkMesh(s);
     EXPECT_TRUE(after.watertight()) << describe(after);
     EXPECT_NEAR(after.volume, before.volume, 0.01 * before.volume);
-    // normals are the new surface's: nearly radial on a round sphere
-    for (size_t v = 0; v < s.points.size(); ++v) {
-        const Vec3f& p = s.points[v];
-        const Vec3f& n = s.normals[v];
-        EXPECT_GT((double(p.x) * n.x + double(p.y) * n.y + double(p.z) * n.z) / length(p), 0.98);
-    }
+    EXPECT_TRUE(s.normals.empty()); // moved points: the old normals would be stale
     // no rounds, or no room to move: the mesh as it was
     EXPECT_EQ(post::smoothAlongNormals(bumpy, 0, bound).points, bumpy.points);
     EXPECT_EQ(post::smoothAlongNormals(bumpy, 6, 0.0).points, bumpy.points);
@@ -122,7 +117,6 @@ TEST(Smooth, SameBitsForAnyThreadCount)
     }
     const TriangleMesh many = post::smoothAlongNormals(bumpy, 6, 0.03);
     EXPECT_EQ(one.points, many.points);
-    EXPECT_EQ(one.normals, many.normals);
 }
 
 } // namespace
