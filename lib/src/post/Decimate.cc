@@ -31,7 +31,7 @@
 // - leave a triangle thinner than kMinQuality that was not already thinner (slivers);
 // - carry a vertex farther from the input than DecimateTarget::maxDrift (see State::drift);
 // - move the surface by more than DecimateTarget::maxStep, either way (Block::withinStep): the
-//   new point, the old ends and triangle middles, and the new edges' and triangles' middles.
+//   new point, the old ends and triangle middles, and the new edges' middles.
 //   Without the last, collapses across a ridge or a sheet's rim cut it between the points, by
 //   0.56 voxel on the 1.7M-particle frame at t = 0.5 s, where every point stayed within 0.4.
 // The shape guards run first: they refuse nine collapses in ten of those refused, and cheaply.
@@ -54,6 +54,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <queue>
 #include <utility>
 
@@ -321,10 +322,11 @@ private:
         // how far the surface moves: the drift bound, and the fans for withinStep
         const bool stepBound = mMaxStep < std::numeric_limits<double>::infinity();
         double drift = 0; // see State::drift
-        mOld.clear(), mAfter.clear(), mFar.clear();
-        if (stepBound) mOld.resize(2); // the two that go first: see withinStep
+        mOld.clear(), mOldIds.clear(), mAfter.clear(), mNewIds.clear(), mFar.clear();
+        if (stepBound) mOld.resize(2), mOldIds.resize(2); // the two that go first: withinStep
         for (const std::vector<uint32_t>* list : {&mTa, &mTb})
             for (uint32_t t : *list) {
+                if (list == &mTb && t == mTb.front()) mFromB = uint32_t(mAfter.size());
                 Vec3d before[3], after[3];
                 corners(t, before, after);
                 double far = 0; // the plane is as far off as its corners may be
@@ -337,20 +339,25 @@ private:
                 const bool gone = t == shared[0] || t == shared[1];
                 if (!stepBound || (gone && list == &mTb)) continue; // the two are in both fans
                 // the old triangle's middle, standing for the surface it covered: near the same
-                // triangle moved, as a rule (its middle moved a third of its moving corner's
-                // way); one of the two that go is a segment of the new fan
+                // triangle moved when that moved it less than the bound (a third of its moving
+                // corner's way)
                 const Vec3d middle = (before[0] + before[1] + before[2]) / 3.0;
-                if (((after[0] + after[1] + after[2]) / 3.0 - middle).length() > mMaxStep &&
-                    !withinDistance(middle, after[0], after[1], after[2], mMaxStep))
-                    mFar.push_back(middle);
+                const bool moved =
+                    ((after[0] + after[1] + after[2]) / 3.0 - middle).length() > mMaxStep;
                 if (gone) {
-                    mOld[t == shared[0] ? 0 : 1] = NearTriangle(before[0], before[1], before[2]);
+                    const int g = t == shared[0] ? 0 : 1;
+                    mOld[g] = NearTriangle(before[0], before[1], before[2]);
+                    mOldIds[g] = mTris[t];
+                    if (moved) // a segment now, no triangle of its own: by its far corner
+                        mFar.push_back({middle, kNone, opposite[g]});
                     continue;
                 }
-                mOld.emplace_back(before[0], before[1],
-                                  before[2]); // mAfter[i] is mOld[i + 2] moved
                 const int k = after[0] == col.point ? 0 : after[1] == col.point ? 1 : 2;
+                if (moved) mFar.push_back({middle, uint32_t(mAfter.size()), mTris[t][(k + 1) % 3]});
+                mOld.emplace_back(before[0], before[1], before[2]); // mAfter[i]: mOld[i + 2] moved
+                mOldIds.push_back(mTris[t]);
                 mAfter.push_back({after[0], after[1], after[2], before[k]});
+                mNewIds.push_back(mTris[t]); // the moving corner's id does not matter
             }
         if (drift > mMaxDrift) return false;
         if (stepBound && !withinStep(a, b, col.point)) return false;
@@ -394,39 +401,58 @@ private:
             if ((point(v) - p).length() <= bound)
                 nearOld = true;
             else
-                mFar.push_back(point(v));
+                mFar.push_back({point(v), v == a ? 0u : mFromB, kNone}); // its fan first
         for (size_t i = 0; i < mOld.size() && !nearOld; ++i)
             nearOld = mOld[i].within(p, bound2);
         if (!nearOld) return false;
-        if (!mFar.empty()) {
-            mNew.clear();
-            for (const auto& t : mAfter)
-                mNew.emplace_back(t[0], t[1], t[2]);
-            for (const Vec3d& q : mFar) {
-                bool near = false;
-                for (size_t i = 0; i < mNew.size() && !near; ++i)
-                    near = mNew[i].within(q, bound2);
-                if (!near) return false;
-            }
-        }
+        mNew.clear();
+        for (const auto& t : mAfter)
+            mNew.emplace_back(t[0], t[1], t[2]);
+        if (!nearAll(mFar, mNew, mNewIds, bound2)) return false;
         // and the new surface near the old between the points too: the middles of the new
-        // edges out of p and of the new triangles. A collapse across a ridge cuts it there, not
-        // at a point, and Loop's edge points sit at those middles. Each is near the old edge
-        // or triangle it came from when the moving corner moved less than twice (three times)
-        // the bound.
+        // edges out of p. A collapse across a ridge cuts it there, not at a point, and Loop's
+        // edge points sit at those middles. Each is near the old edge it came from when the
+        // moving corner moved less than twice the bound. (The new triangles' middles too refused
+        // nothing once these were checked, on the 1.7M-particle frames.)
+        mFar.clear();
         for (size_t i = 0; i < mAfter.size(); ++i) {
             const auto& t = mAfter[i];
             const int k = t[0] == p ? 0 : t[1] == p ? 1 : 2;
             const double moved = (p - t[3]).length();
             if (moved <= 2 * bound) continue;
-            const Vec3d samples[2] = {(p + t[(k + 1) % 3]) * 0.5, (t[0] + t[1] + t[2]) / 3.0};
-            for (int j = 0; j < (moved > 3 * bound ? 2 : 1); ++j) {
-                // the triangle it was first: it is near that one, as a rule
-                bool near = mOld[i + 2].within(samples[j], bound2);
-                for (size_t o = 0; o < mOld.size() && !near; ++o)
-                    near = o != i + 2 && mOld[o].within(samples[j], bound2);
-                if (!near) return false;
+            mFar.push_back({(p + t[(k + 1) % 3]) * 0.5, uint32_t(i + 2), mNewIds[i][(k + 1) % 3]});
+        }
+        return nearAll(mFar, mOld, mOldIds, bound2);
+    }
+
+    /// A point to find near a fan: the triangle to try first (kNone: none) and a ring vertex
+    /// it lies by (kNone: none), whose triangles come next.
+    struct Sample
+    {
+        Vec3d q;
+        uint32_t own, hint;
+    };
+
+    /// Each sample within the bound of one of the triangles (ids: their corners).
+    static bool nearAll(const std::vector<Sample>& samples,
+                        const std::vector<NearTriangle>& triangles, const std::vector<Tri>& ids,
+                        double bound2)
+    {
+        const size_t n = triangles.size();
+        for (const Sample& s : samples) {
+            auto byHint = [&](size_t i) {
+                return s.hint != kNone &&
+                       (ids[i][0] == s.hint || ids[i][1] == s.hint || ids[i][2] == s.hint);
+            };
+            const size_t own = s.own == kNone ? n : s.own;
+            bool near = own < n && triangles[own].within(s.q, bound2);
+            for (size_t i = 0; i < n && !near; ++i)
+                near = i != own && byHint(i) && triangles[i].within(s.q, bound2);
+            for (size_t j = 0; j < n && !near; ++j) { // from the own one on, round
+                const size_t i = own < n ? (own + 1 + j) % n : j;
+                near = i != own && !byHint(i) && triangles[i].within(s.q, bound2);
             }
+            if (!near) return false;
         }
         return true;
     }
@@ -441,7 +467,9 @@ private:
     std::priority_queue<Entry> mHeap;
     double mThreshold = 0, mMaxDrift = 0, mMaxStep = 0;
     std::vector<std::array<Vec3d, 4>> mAfter; // the new fan, and each moved corner's start
-    std::vector<Vec3d> mFar;                  // points to find near the other fan
+    std::vector<Sample> mFar;                 // points to find near the other fan
+    std::vector<Tri> mOldIds, mNewIds;        // the corners of mOld's and mAfter's triangles
+    uint32_t mFromB = 0;                      // mAfter's triangles from b's fan start here
     std::vector<NearTriangle> mOld, mNew;     // the old and new fan, set up for withinStep
     std::vector<uint32_t> mMark; ///< per vertex: the stamp of the last neighbour walk it was in
     uint32_t mStamp = 0;
@@ -528,7 +556,7 @@ Blocks sortIntoBlocks(const State& s, double side, double shift)
     for (uint64_t key : keys)
         for (int round = 0; round < kAxes; ++round)
             ++count[size_t(round) << kBits | (key >> (32 + kBits * round) & kMask)];
-    for (int round = 0; round < kAxes; ++round) {
+    for (int round = 0; round < kAxes && n > 0; ++round) {
         size_t* c = &count[size_t(round) << kBits];
         if (c[keys[0] >> (32 + kBits * round) & kMask] == n) continue; // one digit for all
         for (size_t d = 0, sum = 0; d <= kMask; ++d)
@@ -554,10 +582,11 @@ TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target, De
 {
     DecimateStats st;
     State s = makeState(mesh);
-    size_t idle = 0; // passes in a row without a collapse
-    double rankFactor = 3;
-    tbb::enumerable_thread_specific<std::vector<uint32_t>> localOf(std::vector<uint32_t>(
-        s.points.size(), kNone)); // see Block // collapses under the threshold per collapse made
+    size_t idle = 0;               // passes in a row without a collapse
+    double rankFactor = 3;         // collapses under the threshold per collapse made
+    std::vector<uint32_t> valence; // each point's triangles
+    tbb::enumerable_thread_specific<std::vector<uint32_t>> localOf(
+        std::vector<uint32_t>(s.points.size(), kNone)); // see Block
     for (size_t pass = 0; pass < kMaxPasses; ++pass) {
         const size_t n = s.triangles.size();
         const bool countTarget = target.triangles > 0;
@@ -567,74 +596,88 @@ TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target, De
         if (needed == 0 || n == 0) break;
 
         // blocks: ~kBlockEdges mean edges across, so that their borders are a small part
-        double edgeSum = 0;
-        for (const Tri& t : s.triangles)
-            edgeSum += (s.points[t[1]] - s.points[t[0]]).length();
+        // (a deterministic reduction: fixed chunks added in a fixed tree, for any thread count)
+        const double edgeSum = tbb::parallel_deterministic_reduce(
+            tbb::blocked_range<size_t>(0, n, 4096), 0.0,
+            [&](const tbb::blocked_range<size_t>& r, double sum) {
+                for (size_t t = r.begin(); t != r.end(); ++t)
+                    sum += (s.points[s.triangles[t][1]] - s.points[s.triangles[t][0]]).length();
+                return sum;
+            },
+            std::plus<double>());
         double side = kBlockEdges * std::max(edgeSum / double(n), 1e-30);
-        Vec3d lo(std::numeric_limits<double>::max()), hi(-lo[0]);
-        for (const Vec3d& p : s.points)
-            for (int k = 0; k < 3; ++k)
-                lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
-        for (int k = 0; k < 3; ++k) // the points are centred: 1,000 blocks across at most
-            side = std::max(side, 2.02 * std::max(std::abs(lo[k]), std::abs(hi[k])) / 1000);
+        const double reach = tbb::parallel_reduce( // the points are centred: max |coordinate|
+            tbb::blocked_range<size_t>(0, s.points.size()), 0.0,
+            [&](const tbb::blocked_range<size_t>& r, double m) {
+                for (size_t v = r.begin(); v != r.end(); ++v)
+                    for (int k = 0; k < 3; ++k)
+                        m = std::max(m, std::abs(s.points[v][k]));
+                return m;
+            },
+            [](double a, double b) { return std::max(a, b); });
+        side = std::max(side, 2.02 * reach / 1000); // 1,000 blocks across at most
         const Blocks blocks = sortIntoBlocks(s, side, pass % 2 ? 0.5 : 0.0);
         const std::vector<uint32_t>& tris = blocks.tris;
         const std::vector<size_t>& blockStart = blocks.start;
         const size_t nb = blockStart.size() - 1;
-        std::vector<uint32_t> valence(s.points.size(), 0);
+        valence.assign(s.points.size(), 0);
         for (const Tri& t : s.triangles)
             for (uint32_t v : t)
                 ++valence[v];
 
-        // the pass' threshold, and each block's share of the collapses still needed, from the
-        // edges of every kSample-th triangle (a quarter of the work for the same quantiles)
-        std::vector<float> errors(3 * n, std::numeric_limits<float>::infinity());
-        tbb::parallel_for(
-            tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
-                for (size_t i = r.begin(); i != r.end(); ++i)
-                    for (int k = 0; k < 3 && i % kSample == 0; ++k) {
-                        const Tri& t = s.triangles[tris[i]];
-                        if (t[k] < t[(k + 1) % 3])
-                            errors[3 * i + k] = float(bestCollapse(s, t[k], t[(k + 1) % 3]).error);
-                    }
-            });
-        double threshold = target.maxError;
-        bool allEdges = true;
         // The last few collapses (under 1/kLastShare of the triangles) go to the blocks by
         // their size, cheapest first in each, with no threshold: when a threshold is left to
         // find them, each pass over the whole mesh makes only a handful.
         const bool last = countTarget && needed * kLastShare < n;
-        if (countTarget && !last) {
-            std::vector<float> sorted;
-            sorted.reserve(3 * n / 2);
-            for (float e : errors)
-                if (e <= target.maxError && std::isfinite(e)) sorted.push_back(e);
-            const double rank = rankFactor * double(needed) / kSample;
-            if (rank < double(sorted.size())) {
-                std::nth_element(sorted.begin(), sorted.begin() + size_t(rank), sorted.end());
-                threshold = std::min(threshold, double(sorted[size_t(rank)]));
-                allEdges = false;
-            }
-        }
+        // the pass' threshold, and each block's share of the collapses still needed, from the
+        // edges of every kSample-th triangle (a quarter of the work for the same quantiles)
+        double threshold = target.maxError;
+        bool allEdges = true;
         std::vector<size_t> budget(nb, SIZE_MAX);
         if (countTarget) {
-            std::vector<size_t> under(nb, 0);
-            size_t total = 0;
-            for (size_t b = 0; b < nb; ++b) {
-                if (last)
-                    under[b] = blockStart[b + 1] - blockStart[b];
-                else
-                    for (size_t i = 3 * blockStart[b]; i < 3 * blockStart[b + 1]; ++i)
-                        under[b] += errors[i] <= threshold;
-                total += under[b];
+            std::vector<float> errors; // by block order; infinite where not sampled
+            if (!last) {
+                errors.assign(3 * n, std::numeric_limits<float>::infinity());
+                tbb::parallel_for(
+                    tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
+                        for (size_t i = r.begin(); i != r.end(); ++i)
+                            for (int k = 0; k < 3 && i % kSample == 0; ++k) {
+                                const Tri& t = s.triangles[tris[i]];
+                                if (t[k] < t[(k + 1) % 3])
+                                    errors[3 * i + k] =
+                                        float(bestCollapse(s, t[k], t[(k + 1) % 3]).error);
+                            }
+                    });
+                std::vector<float> sorted;
+                sorted.reserve(3 * n / 2 / kSample);
+                for (float e : errors)
+                    if (e <= target.maxError && std::isfinite(e)) sorted.push_back(e);
+                const double rank = rankFactor * double(needed) / kSample;
+                if (rank < double(sorted.size())) {
+                    std::nth_element(sorted.begin(), sorted.begin() + size_t(rank), sorted.end());
+                    threshold = std::min(threshold, double(sorted[size_t(rank)]));
+                    allEdges = false;
+                }
             }
+            std::vector<size_t> under(nb, 0);
+            tbb::parallel_for(
+                tbb::blocked_range<size_t>(0, nb), [&](const tbb::blocked_range<size_t>& r) {
+                    for (size_t b = r.begin(); b != r.end(); ++b)
+                        if (last)
+                            under[b] = blockStart[b + 1] - blockStart[b];
+                        else
+                            for (size_t i = 3 * blockStart[b]; i < 3 * blockStart[b + 1]; ++i)
+                                under[b] += errors[i] <= threshold;
+                });
+            size_t total = 0;
+            for (size_t u : under)
+                total += u;
             size_t given = 0;
             for (size_t b = 0; b < nb; ++b)
                 given += budget[b] = total ? size_t(double(needed) * double(under[b]) / total) : 0;
             for (size_t b = 0; b < nb && given < needed; ++b) // what rounding down left
                 if (under[b] > 0) ++budget[b], ++given;
         }
-        errors = {};
 
         std::vector<BlockResult> results(nb);
         tbb::parallel_for(

@@ -14,7 +14,8 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
+
+#include <algorithm>
 
 namespace fluidsurf {
 namespace post {
@@ -31,33 +32,33 @@ TriangleMesh smoothAlongNormals(const TriangleMesh& mesh, int iterations, double
     const size_t nv = mesh.points.size();
     if (iterations <= 0 || !(maxMove > 0) || mesh.triangles.empty()) return out;
 
-    // neighbours from the directed sides (v, w) of every triangle, both ways: after sorting,
-    // each run of one key is an edge, as long as the number of its triangles
-    std::vector<uint64_t> sides;
-    sides.reserve(6 * mesh.triangles.size());
-    for (const auto& t : mesh.triangles)
-        for (int k = 0; k < 3; ++k) {
-            const uint64_t a = t[k], b = t[(k + 1) % 3];
-            sides.push_back(a << 32 | b), sides.push_back(b << 32 | a);
-        }
-    tbb::parallel_sort(sides.begin(), sides.end());
-    std::vector<uint32_t> start(nv + 1, 0), neighbours;
-    std::vector<uint8_t> fixed(nv, 0);
-    for (size_t i = 0; i < sides.size();) {
-        size_t j = i;
-        while (j < sides.size() && sides[j] == sides[i])
-            ++j;
-        const uint32_t v = uint32_t(sides[i] >> 32);
-        if (j - i != 2) fixed[v] = 1; // a border or non-manifold edge
-        neighbours.push_back(uint32_t(sides[i]));
-        ++start[v + 1];
-        i = j;
-    }
-    sides = {};
-    for (size_t v = 0; v < nv; ++v)
-        start[v + 1] += start[v];
-
+    // each point's neighbours, ascending, gathered from its own triangles (in parallel, no
+    // global sort): in a closed manifold fan every neighbour is met twice, so one met otherwise
+    // marks a border or a non-manifold edge. Point v's are neighbours[2 * corners.start[v] + i],
+    // i < count[v].
     const VertexTriangles corners(mesh);
+    std::vector<uint32_t> neighbours(2 * corners.tris.size()), count(nv, 0);
+    std::vector<uint8_t> fixed(nv, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t v = r.begin(); v != r.end(); ++v) {
+            uint32_t* const first = &neighbours[2 * size_t(corners.start[v])];
+            uint32_t* last = first;
+            for (uint32_t i = corners.start[v]; i < corners.start[v + 1]; ++i)
+                for (uint32_t w : mesh.triangles[corners.tris[i]])
+                    if (w != v) *last++ = w;
+            std::sort(first, last);
+            uint32_t* out = first;
+            for (uint32_t* w = first; w != last;) {
+                uint32_t* run = w;
+                while (run != last && *run == *w)
+                    ++run;
+                if (run - w != 2) fixed[v] = 1;
+                *out++ = *w;
+                w = run;
+            }
+            count[v] = uint32_t(out - first);
+        }
+    });
     AreaNormals normals(mesh, corners); // cheap, and only their directions matter here
     std::vector<Vec3d> from(nv), p(nv), next(nv);
     for (size_t v = 0; v < nv; ++v)
@@ -69,15 +70,16 @@ TriangleMesh smoothAlongNormals(const TriangleMesh& mesh, int iterations, double
             tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
                 for (size_t v = r.begin(); v != r.end(); ++v) {
                     next[v] = p[v];
-                    if (fixed[v] || start[v] == start[v + 1]) continue;
+                    if (fixed[v] || count[v] == 0) continue;
                     Vec3d n = normals.normals()[v];
                     const double len = n.length();
                     if (!(len > 0)) continue;
                     n /= len;
                     Vec3d mean(0.0);
-                    for (uint32_t i = start[v]; i < start[v + 1]; ++i)
-                        mean += p[neighbours[i]];
-                    mean /= double(start[v + 1] - start[v]);
+                    const uint32_t* const around = &neighbours[2 * size_t(corners.start[v])];
+                    for (uint32_t i = 0; i < count[v]; ++i)
+                        mean += p[around[i]];
+                    mean /= double(count[v]);
                     const Vec3d moved = p[v] + n * (f * n.dot(mean - p[v]));
                     const Vec3d offset = moved - from[v];
                     const double dist = offset.length();
