@@ -67,7 +67,9 @@ using Tri = std::array<uint32_t, 3>;
 
 constexpr double kBlockEdges = 32;     ///< a block's side in mean edge lengths (~2,500 triangles)
 constexpr double kMaxTurnDegrees = 60; ///< the most a remaining triangle's normal may turn
-constexpr double kMinQuality = 0.25;   ///< 4 sqrt3 area / sum of squared sides; ~10 deg at 0.25
+/// A triangle's quality: 2 sqrt3 |n| / (sum of squared sides), |n| twice its area: 1 for an
+/// equilateral triangle, 0 for a degenerate one; ~10 deg at 0.25. Compared in squares.
+constexpr double kMinQuality = 0.25;
 constexpr size_t kMaxPasses = 64;
 constexpr size_t kLastShare = 10; ///< see "last" in decimate()
 constexpr size_t kSample = 4;     ///< a pass' threshold from every kSample-th triangle's edges
@@ -103,22 +105,6 @@ Collapse bestCollapse(const State& s, uint32_t a, uint32_t b)
     const Quadric q = s.quadrics[a] + s.quadrics[b];
     const Vec3d p = q.minimizer((s.points[a] + s.points[b]) * 0.5);
     return {p, q.w > 0 ? q.error(p) / q.w : 0.0};
-}
-
-double sumOfSquaredSides(const Vec3d t[3])
-{
-    return (t[1] - t[0]).lengthSqr() + (t[2] - t[1]).lengthSqr() + (t[0] - t[2]).lengthSqr();
-}
-
-/// The quality guard: triangle `after` (its normal's squared length l1) is thinner than
-/// kMinQuality and than `before` was. Quality is 2 sqrt3 |n| / (sum of squared sides): 1 for an
-/// equilateral triangle, 0 for a degenerate one; compared here in squares.
-bool isThinner(double l1, const Vec3d after[3], double l0, const Vec3d before[3])
-{
-    const double s1 = sumOfSquaredSides(after);
-    if (!(12 * l1 < kMinQuality * kMinQuality * s1 * s1)) return false;
-    const double s0 = sumOfSquaredSides(before);
-    return l1 * s0 * s0 < l0 * s1 * s1;
 }
 
 struct BlockResult
@@ -290,17 +276,29 @@ private:
         };
         // the shapes first: they refuse most collapses (nine in ten refused), and cheaply: in
         // squares, without roots
-        for (const std::vector<uint32_t>* list : {&mTa, &mTb})
-            for (uint32_t t : *list) {
+        // squares, without roots. Each remaining triangle of v's fan is (v, u, w) in its own
+        // order, with only v moving, from x to the new point q.
+        const Vec3d& q = col.point;
+        for (const uint32_t v : {a, b}) {
+            const Vec3d x = point(v);
+            for (uint32_t t : v == a ? mTa : mTb) {
                 if (t == shared[0] || t == shared[1]) continue;
-                Vec3d before[3], after[3];
-                corners(t, before, after);
-                const Vec3d n0 = (before[1] - before[0]).cross(before[2] - before[0]);
-                const Vec3d n1 = (after[1] - after[0]).cross(after[2] - after[0]);
+                const Tri& tri = mTris[t];
+                const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+                const Vec3d& u = point(tri[(k + 1) % 3]);
+                const Vec3d& w = point(tri[(k + 2) % 3]);
+                const Vec3d n0 = (u - x).cross(w - x), n1 = (u - q).cross(w - q);
                 const double turn = n0.dot(n1), l0 = n0.lengthSqr(), l1 = n1.lengthSqr();
                 if (!(l1 > 0) || turn < 0 || turn * turn < kMaxTurnCos2 * l0 * l1) return false;
-                if (isThinner(l1, after, l0, before)) return false;
+                // thinner than kMinQuality, and than it was (quality: see isThinner)
+                const double uw = (u - w).lengthSqr();
+                const double s1 = (u - q).lengthSqr() + (w - q).lengthSqr() + uw;
+                if (12 * l1 < kMinQuality * kMinQuality * s1 * s1) {
+                    const double s0 = (u - x).lengthSqr() + (w - x).lengthSqr() + uw;
+                    if (l1 * s0 * s0 < l0 * s1 * s1) return false;
+                }
             }
+        }
         // the topology: the ends' neighbours, marked with stamps (no sorting)
         const uint32_t markA = ++mStamp, markB = ++mStamp;
         size_t na = 0, nb = 0, common = 0; // b is a's neighbour and a b's

@@ -61,9 +61,9 @@ struct Quadric
         if (!(det > 0)) return rest;
         const double c11 = m00 * m22 - a02 * a02, c12 = a01 * a02 - m00 * a12,
                      c22 = m00 * m11 - a01 * a01;
-        return Vec3d(c00 * r0 + c01 * r1 + c02 * r2, c01 * r0 + c11 * r1 + c12 * r2,
-                     c02 * r0 + c12 * r1 + c22 * r2) /
-               det;
+        const double inv = 1 / det; // one division: the decimation's hottest line
+        return Vec3d((c00 * r0 + c01 * r1 + c02 * r2) * inv, (c01 * r0 + c11 * r1 + c12 * r2) * inv,
+                     (c02 * r0 + c12 * r1 + c22 * r2) * inv);
     }
 };
 
