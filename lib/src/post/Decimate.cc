@@ -267,15 +267,7 @@ private:
         }
         if (nShared != 2) return false;
         const Collapse col = bestCollapse(mS, mGlobal[a], mGlobal[b]);
-        auto corners = [&](uint32_t t, Vec3d before[3], Vec3d after[3]) {
-            for (int k = 0; k < 3; ++k) {
-                const uint32_t v = mTris[t][k];
-                before[k] = point(v);
-                after[k] = v == a || v == b ? col.point : before[k];
-            }
-        };
         // the shapes first: they refuse most collapses (nine in ten refused), and cheaply: in
-        // squares, without roots
         // squares, without roots. Each remaining triangle of v's fan is (v, u, w) in its own
         // order, with only v moving, from x to the new point q.
         const Vec3d& q = col.point;
@@ -320,43 +312,51 @@ private:
         // how far the surface moves: the drift bound, and the fans for withinStep
         const bool stepBound = mMaxStep < std::numeric_limits<double>::infinity();
         double drift = 0; // see State::drift
+        // (a plane of the old fan is as far off the input as its corners may be)
+        auto far = [&](const Tri& t) {
+            return double(std::max(
+                {mS.drift[mGlobal[t[0]]], mS.drift[mGlobal[t[1]]], mS.drift[mGlobal[t[2]]]}));
+        };
+        auto driftTo = [&](const Vec3d& x, const Vec3d& u, const Vec3d& w, const Tri& t) {
+            const Vec3d n0 = (u - x).cross(w - x);
+            const double l0 = n0.length();
+            if (l0 > 0) drift = std::max(drift, std::abs(n0.dot(q - x)) / l0 + far(t));
+        };
         mOld.clear(), mOldIds.clear(), mAfter.clear(), mNewIds.clear(), mFar.clear();
-        if (stepBound) mOld.resize(2), mOldIds.resize(2); // the two that go first: withinStep
-        for (const std::vector<uint32_t>* list : {&mTa, &mTb})
-            for (uint32_t t : *list) {
-                if (list == &mTb && t == mTb.front()) mFromB = uint32_t(mAfter.size());
-                Vec3d before[3], after[3];
-                corners(t, before, after);
-                double far = 0; // the plane is as far off as its corners may be
-                for (uint32_t v : mTris[t])
-                    far = std::max(far, double(mS.drift[mGlobal[v]]));
-                const Vec3d n0 = (before[1] - before[0]).cross(before[2] - before[0]);
-                const double l0 = n0.length();
-                if (l0 > 0)
-                    drift = std::max(drift, std::abs(n0.dot(col.point - before[0])) / l0 + far);
-                const bool gone = t == shared[0] || t == shared[1];
-                if (!stepBound || (gone && list == &mTb)) continue; // the two are in both fans
-                // the old triangle's middle, standing for the surface it covered: near the same
-                // triangle moved when that moved it less than the bound (a third of its moving
-                // corner's way)
-                const Vec3d middle = (before[0] + before[1] + before[2]) / 3.0;
-                const bool moved =
-                    ((after[0] + after[1] + after[2]) / 3.0 - middle).length() > mMaxStep;
-                if (gone) {
-                    const int g = t == shared[0] ? 0 : 1;
-                    mOld[g] = NearTriangle(before[0], before[1], before[2]);
-                    mOldIds[g] = mTris[t];
-                    if (moved) // a segment now, no triangle of its own: by its far corner
-                        mFar.push_back({middle, kNone, opposite[g]});
-                    continue;
-                }
-                const int k = after[0] == col.point ? 0 : after[1] == col.point ? 1 : 2;
-                if (moved) mFar.push_back({middle, uint32_t(mAfter.size()), mTris[t][(k + 1) % 3]});
-                mOld.emplace_back(before[0], before[1], before[2]); // mAfter[i]: mOld[i + 2] moved
-                mOldIds.push_back(mTris[t]);
-                mAfter.push_back({after[0], after[1], after[2], before[k]});
-                mNewIds.push_back(mTris[t]); // the moving corner's id does not matter
+        // the two that go, first (see withinStep): each a segment from q to its far corner now
+        for (int g = 0; g < 2; ++g) {
+            const Tri& tri = mTris[shared[g]];
+            const Vec3d &x = point(tri[0]), &u = point(tri[1]), &w = point(tri[2]);
+            driftTo(x, u, w, tri);
+            if (!stepBound) continue;
+            mOld.emplace_back(x, u, w);
+            mOldIds.push_back(tri);
+            // the old triangle's middle, standing for the surface it covered: near the same
+            // triangle moved when that moved it less than the bound; a segment has none
+            const Vec3d middle = (x + u + w) / 3.0, c = point(opposite[g]);
+            if (((q + q + c) / 3.0 - middle).length() > mMaxStep)
+                mFar.push_back({middle, kNone, opposite[g]}); // by its far corner, as a rule
+        }
+        // the others, (v, u, w) with only v moving from x to q; mAfter[i] is mOld[i + 2] moved
+        for (const uint32_t v : {a, b}) {
+            if (v == b) mFromB = uint32_t(mAfter.size());
+            const Vec3d x = point(v);
+            for (uint32_t t : v == a ? mTa : mTb) {
+                if (t == shared[0] || t == shared[1]) continue;
+                const Tri& tri = mTris[t];
+                const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+                const Tri ids{v, tri[(k + 1) % 3], tri[(k + 2) % 3]};
+                const Vec3d &u = point(ids[1]), &w = point(ids[2]);
+                driftTo(x, u, w, tri);
+                if (!stepBound) continue;
+                if ((q - x).length() > 3 * mMaxStep) // its middle moved a third of that
+                    mFar.push_back({(x + u + w) / 3.0, uint32_t(mAfter.size()), ids[1]});
+                mOld.emplace_back(x, u, w);
+                mOldIds.push_back(ids);
+                mAfter.push_back({q, u, w, x});
+                mNewIds.push_back(ids); // v's id stands for q's: only the others are asked
             }
+        }
         if (drift > mMaxDrift) return false;
         if (stepBound && !withinStep(a, b, col.point)) return false;
         error = col.error;
@@ -413,13 +413,9 @@ private:
         // moving corner moved less than twice the bound. (The new triangles' middles too refused
         // nothing once these were checked, on the 1.7M-particle frames.)
         mFar.clear();
-        for (size_t i = 0; i < mAfter.size(); ++i) {
-            const auto& t = mAfter[i];
-            const int k = t[0] == p ? 0 : t[1] == p ? 1 : 2;
-            const double moved = (p - t[3]).length();
-            if (moved <= 2 * bound) continue;
-            mFar.push_back({(p + t[(k + 1) % 3]) * 0.5, uint32_t(i + 2), mNewIds[i][(k + 1) % 3]});
-        }
+        for (size_t i = 0; i < mAfter.size(); ++i) // (p, u, w, where p's corner was)
+            if ((p - mAfter[i][3]).length() > 2 * bound)
+                mFar.push_back({(p + mAfter[i][1]) * 0.5, uint32_t(i + 2), mNewIds[i][1]});
         return nearAll(mFar, mOld, mOldIds, bound2);
     }
 
@@ -464,7 +460,7 @@ private:
     std::vector<uint32_t> mVersion;              ///< bumped when a vertex moves or goes
     std::priority_queue<Entry> mHeap;
     double mThreshold = 0, mMaxDrift = 0, mMaxStep = 0;
-    std::vector<std::array<Vec3d, 4>> mAfter; // the new fan, and each moved corner's start
+    std::vector<std::array<Vec3d, 4>> mAfter; // the new fan (p, u, w), and where p's corner was
     std::vector<Sample> mFar;                 // points to find near the other fan
     std::vector<Tri> mOldIds, mNewIds;        // the corners of mOld's and mAfter's triangles
     uint32_t mFromB = 0;                      // mAfter's triangles from b's fan start here
