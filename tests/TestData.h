@@ -46,6 +46,14 @@ inline const RealFrame kRealFrames[] = {
     {"splishsplash_particle_grid_400_particles.bgeo", 0.025},
 };
 
+/// The large frames of ../shared/data/large (DualSPHysics, the thesis' scale: benchmarks, and
+/// the few tests that must hold there too) with their particle radius (its README).
+inline const RealFrame kLargeFrames[] = {
+    {"dam_obstacle_t0.20_1704086_particles.xyz", 0.0018},
+    {"dam_obstacle_t0.50_1694136_particles.xyz", 0.0018},
+    {"dam_obstacle_t0.50_398850_particles.vtk", 0.0029},
+};
+
 /// A fresh folder under /tmp, removed with its content on destruction.
 class TempDir
 {

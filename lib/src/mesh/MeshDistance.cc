@@ -58,8 +58,9 @@ public:
 
     /// Distance from p to the mesh, or +inf beyond `reach`: the cells in rings around p's cell,
     /// nearest ring first, until no unvisited cell can hold anything nearer (a cell k rings out
-    /// is at least (k - 1) cells away).
-    double operator()(const Vec3d& p, double reach) const
+    /// is at least (k - 1) cells away). Some distance <= `enough` as soon as one is found: the
+    /// caller wants the largest distance, and a point this near cannot be it.
+    double operator()(const Vec3d& p, double reach, double enough) const
     {
         double best = std::numeric_limits<double>::infinity();
         const int64_t c[3] = {index(p[0]), index(p[1]), index(p[2])};
@@ -69,8 +70,10 @@ public:
                 for (int64_t y = c[1] - k; y <= c[1] + k; ++y) {
                     const bool side = std::abs(x - c[0]) == k || std::abs(y - c[1]) == k;
                     for (int64_t z = c[2] - k; z <= c[2] + k;
-                         z += side ? 1 : 2 * std::max<int64_t>(k, 1))
+                         z += side ? 1 : 2 * std::max<int64_t>(k, 1)) {
                         visit(p, key(x, y, z), best);
+                        if (best <= enough) return best;
+                    }
                 }
         return best <= reach ? best : std::numeric_limits<double>::infinity();
     }
@@ -111,18 +114,27 @@ double meshDistance(const TriangleMesh& a, const TriangleMesh& b, double reach)
         edges += (toVec3d(b.points[t[1]]) - toVec3d(b.points[t[0]])).length();
     const double cell = std::clamp(edges / double(b.triangles.size()), reach / 16, reach);
     const Buckets buckets(b, cell);
-    auto distance = [&](const Vec3d& p) { return buckets(p, reach); };
+    // a's points each once (those of its triangles), then its triangles' middles, for a middle
+    // that bulges away from b; each only as far as it could raise the largest found so far
+    std::vector<uint8_t> used(a.points.size(), 0);
+    for (const auto& t : a.triangles)
+        used[t[0]] = used[t[1]] = used[t[2]] = 1;
+    const size_t np = a.points.size();
     return tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, a.triangles.size()), 0.0,
+        tbb::blocked_range<size_t>(0, np + a.triangles.size()), 0.0,
         [&](const tbb::blocked_range<size_t>& r, double worst) {
-            for (size_t t = r.begin(); t != r.end(); ++t) {
-                const auto& tri = a.triangles[t];
-                const Vec3d p0 = toVec3d(a.points[tri[0]]), p1 = toVec3d(a.points[tri[1]]),
-                            p2 = toVec3d(a.points[tri[2]]);
-                // the corners (a vertex once per triangle: simpler than once, and cheap) and
-                // the centroid, for a middle that bulges away from b
-                worst = std::max({worst, distance(p0), distance(p1), distance(p2),
-                                  distance((p0 + p1 + p2) / 3.0)});
+            for (size_t i = r.begin(); i != r.end(); ++i) {
+                Vec3d p;
+                if (i < np) {
+                    if (!used[i]) continue;
+                    p = toVec3d(a.points[i]);
+                } else {
+                    const auto& tri = a.triangles[i - np];
+                    p = (toVec3d(a.points[tri[0]]) + toVec3d(a.points[tri[1]]) +
+                         toVec3d(a.points[tri[2]])) /
+                        3.0;
+                }
+                worst = std::max(worst, buckets(p, reach, worst));
             }
             return worst;
         },
