@@ -207,6 +207,7 @@ private:
     };
 
     Vec3d& point(uint32_t v) { return mS.points[mGlobal[v]]; }
+    const Vec3d& point(uint32_t v) const { return mS.points[mGlobal[v]]; }
 
     void aliveTris(uint32_t v, std::vector<uint32_t>& out) const
     {
@@ -394,6 +395,7 @@ private:
     bool withinStep(uint32_t a, uint32_t b, const Vec3d& p)
     {
         const double bound = mMaxStep, bound2 = bound * bound;
+        if (isFlat(a, b, p)) return true;
         bool nearOld = false;
         for (uint32_t v : {a, b}) // an end that moves less than the bound is near all new
             if ((point(v) - p).length() <= bound)
@@ -417,6 +419,46 @@ private:
             if ((p - mAfter[i][3]).length() > 2 * bound)
                 mFar.push_back({(p + mAfter[i][1]) * 0.5, uint32_t(i + 2), mNewIds[i][1]});
         return nearAll(mFar, mOld, mOldIds, bound2);
+    }
+
+    /// Whether the collapse moves a flat fan within itself, so that no point need be tested
+    /// (seven collapses in ten on the 1.7M-particle frames): every corner, p included, lies in a
+    /// slab no thicker than the bound, every triangle of the old fan and the new faces the
+    /// slab's normal, and the new fan goes round p once. Then the new fan is a graph over the
+    /// region its ring bounds in the slab's plane (a simple polygon: star-shaped around p), and
+    /// so is the old one, whose every triangle faces the normal and whose border is the same
+    /// ring; each point of either has a point of the other straight above or below it, within
+    /// the slab.
+    bool isFlat(uint32_t a, uint32_t b, const Vec3d& p) const
+    {
+        Vec3d n(0.0); // the old fan's area-weighted normal
+        for (const NearTriangle& t : mOld)
+            n += t.normal();
+        const double len = n.length();
+        if (!(len > 0)) return false;
+        n /= len;
+        for (const NearTriangle& t : mOld)
+            if (!(t.normal().dot(n) > 0)) return false;
+        const Vec3d x = point(a);
+        double lo = 0, hi = (point(b) - x).dot(n);
+        if (hi < lo) std::swap(lo, hi);
+        auto inSlab = [&](const Vec3d& q) {
+            const double d = (q - x).dot(n);
+            lo = std::min(lo, d), hi = std::max(hi, d);
+            return hi - lo <= mMaxStep;
+        };
+        if (!inSlab(p)) return false;
+        // round p once: the ring's sides that cross a ray from p, in the slab's plane (each
+        // crossing counts once in the ring's turning sense, all triangles facing n)
+        const Vec3d e = std::abs(n[0]) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+        const Vec3d across = n.cross(e); // the ray runs along n x across, from p
+        size_t crossings = 0;
+        for (const auto& t : mAfter) { // (p, u, w) with u -> w a side of the ring
+            if (!((t[1] - p).cross(t[2] - p).dot(n) > 0) || !inSlab(t[1]) || !inSlab(t[2]))
+                return false;
+            crossings += (t[1] - p).dot(across) < 0 && (t[2] - p).dot(across) >= 0;
+        }
+        return crossings == 1;
     }
 
     /// A point to find near a fan: the triangle to try first (kNone: none) and a ring vertex

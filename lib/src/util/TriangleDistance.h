@@ -46,6 +46,9 @@ public:
         mN2 = mN.lengthSqr(); // = mD00 mD11 - mD01^2, the barycentric solve's determinant
     }
 
+    /// (b - a) x (c - a): the normal, twice the area long
+    const Vec3d& normal() const { return mN; }
+
     /// triangleDistance(p, a, b, c) <= sqrt(bound2), with squares and early outs: far from
     /// the plane means far from the triangle, and any near side will do.
     bool within(const Vec3d& p, double bound2) const
