@@ -44,7 +44,8 @@ struct DecimateStats
 /// non-manifold edge or of a non-manifold fan never move, so whatever was open or non-manifold
 /// stays as it was. Points not used by the result are dropped; `kept`, if given, gets each
 /// result point's index in mesh (the points a collapse merged keep the index of one end).
-TriangleMesh decimate(const TriangleMesh& mesh, const DecimateTarget& target,
+/// mesh by value: its triangles become the work's own (move a mesh in to spare the copy).
+TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target,
                       DecimateStats* stats = nullptr, std::vector<uint32_t>* kept = nullptr);
 
 } // namespace post

@@ -126,7 +126,7 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
             to.maxStep = kDecimateStep * voxel;
             post::DecimateStats ds;
             std::vector<uint32_t> kept;
-            mesh = post::decimate(mesh, to, &ds, &kept);
+            mesh = post::decimate(std::move(mesh), to, &ds, &kept);
             std::vector<uint32_t> next(kept.size());
             for (size_t v = 0; v < kept.size(); ++v)
                 next[v] = component[kept[v]];

@@ -10,16 +10,18 @@ namespace post {
 
 struct Quadric
 {
-    double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0; ///< sum of w n n^T
-    double b0 = 0, b1 = 0, b2 = 0;                               ///< sum of w d n
-    double c = 0;                                                ///< sum of w d^2
-    double w = 0;                                                ///< sum of w (the area)
+    // No initialisers: an array of a million is filled in parallel without being zeroed first
+    // (Quadric{} is the empty set of planes).
+    double a00, a01, a02, a11, a12, a22; ///< sum of w n n^T
+    double b0, b1, b2;                   ///< sum of w d n
+    double c;                            ///< sum of w d^2
+    double w;                            ///< sum of w (the area)
 
     /// The plane through p with unit normal n, weighted by w (a triangle's area).
     static Quadric plane(const Vec3d& n, const Vec3d& p, double w)
     {
         const double d = -n.dot(p);
-        Quadric q;
+        Quadric q{};
         q.a00 = w * n[0] * n[0], q.a01 = w * n[0] * n[1], q.a02 = w * n[0] * n[2];
         q.a11 = w * n[1] * n[1], q.a12 = w * n[1] * n[2], q.a22 = w * n[2] * n[2];
         q.b0 = w * d * n[0], q.b1 = w * d * n[1], q.b2 = w * d * n[2];
