@@ -18,7 +18,7 @@
 //   that cheap collapses everywhere go before dear ones anywhere (flat bumps first, as the
 //   thesis wants). The collapses still needed are shared out between blocks in proportion to
 //   their edges under the threshold, so a pass never overshoots a triangle target; the last
-//   tenth go to the blocks by size, cheapest first in each.
+//   ones (under a fifth of the triangles left) go to the blocks by size, cheapest first in each.
 // - Why not one serial heap (the textbook greedy): measured on the real frames, it pulled thin
 //   tips in by 2-4 voxels whatever the weights or placement, where the passes keep them.
 //
@@ -72,9 +72,9 @@ constexpr double kMaxTurnDegrees = 60; ///< the most a remaining triangle's norm
 /// equilateral triangle, 0 for a degenerate one; ~10 deg at 0.25. Compared in squares.
 constexpr double kMinQuality = 0.25;
 constexpr size_t kMaxPasses = 64;
-constexpr size_t kLastShare = 10; ///< see "last" in decimate()
-constexpr size_t kSample = 4;     ///< a pass' threshold from every kSample-th triangle's edges
-constexpr size_t kMaxFan = 64;    ///< vertices with more triangles are left alone
+constexpr size_t kLastShare = 5; ///< see "last" in decimate()
+constexpr size_t kSample = 4;    ///< a pass' threshold from every kSample-th triangle's edges
+constexpr size_t kMaxFan = 64;   ///< vertices with more triangles are left alone
 constexpr uint32_t kNone = UINT32_MAX;
 
 const double kMaxTurnCos = std::cos(kMaxTurnDegrees * M_PI / 180);
@@ -666,7 +666,9 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
 
         // The last few collapses (under 1/kLastShare of the triangles) go to the blocks by
         // their size, cheapest first in each, with no threshold: when a threshold is left to
-        // find them, each pass over the whole mesh makes only a handful.
+        // find them, each pass over the whole mesh makes only a handful. (A tenth left one pass
+        // of 9,000 collapses for a needed 49,000 on the t0.50 1.69M frame; a fifth saves it, 4%
+        // of the chain's work, with the same fidelity.)
         const bool last = countTarget && needed * kLastShare < n;
         // the pass' threshold, and each block's share of the collapses still needed, from the
         // edges of every kSample-th triangle (a quarter of the work for the same quantiles)
