@@ -28,12 +28,14 @@
 // - break manifoldness: the ends must share exactly the two neighbours across the edge (the
 //   link condition), and no vertex may be left with fewer than three triangles;
 // - turn a remaining triangle's normal by more than kMaxTurnDegrees (a fold or flip);
-// - leave a triangle thinner than kMinQuality that was not already thinner (slivers);
+// - leave a triangle with an angle under kThinAngleDegrees (MeshCheck.h: what checkMesh counts
+//   as thin) that was not already thinner (slivers);
 // - carry a vertex farther from the input than DecimateTarget::maxDrift (see State::drift);
 // - move the surface by more than DecimateTarget::maxStep, either way (Block::withinStep): the
 //   new point, the old ends and triangle middles, and the new edges' middles.
 //   Without the last, collapses across a ridge or a sheet's rim cut it between the points, by
 //   0.56 voxel on the 1.7M-particle frame at t = 0.5 s, where every point stayed within 0.4.
+//   A flat fan passes without a point tested (Block::isFlat): seven collapses in ten there.
 // The shape guards run first: they refuse nine collapses in ten of those refused, and cheaply.
 //
 // Set-up costs count on two cores: a block numbers its vertices in the order they first appear
@@ -45,6 +47,8 @@
 #include "post/Quadric.h"
 
 #include "util/TriangleDistance.h"
+
+#include <fluidsurf/MeshCheck.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -68,9 +72,6 @@ using Tri = std::array<uint32_t, 3>;
 
 constexpr double kBlockEdges = 32;     ///< a block's side in mean edge lengths (~2,500 triangles)
 constexpr double kMaxTurnDegrees = 60; ///< the most a remaining triangle's normal may turn
-/// A triangle's quality: 2 sqrt3 |n| / (sum of squared sides), |n| twice its area: 1 for an
-/// equilateral triangle, 0 for a degenerate one; ~10 deg at 0.25. Compared in squares.
-constexpr double kMinQuality = 0.25;
 constexpr size_t kMaxPasses = 64;
 constexpr size_t kLastShare = 5; ///< see "last" in decimate()
 constexpr size_t kSample = 4;    ///< a pass' threshold from every kSample-th triangle's edges
@@ -79,6 +80,9 @@ constexpr uint32_t kNone = UINT32_MAX;
 
 const double kMaxTurnCos = std::cos(kMaxTurnDegrees * M_PI / 180);
 const double kMaxTurnCos2 = kMaxTurnCos * kMaxTurnCos; ///< the turn guard compares squares
+/// sin^2 of the smallest angle the thin guard lets a new triangle have: a triangle's smallest
+/// angle (<= 60 deg) has sin^2 = |n|^2 shortest^2 / (a^2 b^2 c^2), |n| twice its area.
+const double kThinSin2 = std::pow(std::sin(kThinAngleDegrees * M_PI / 180), 2);
 
 /// The whole mesh between passes, points relative to the middle of its bounds so that the
 /// quadrics' constants stay small and their errors exact to many digits.
@@ -284,12 +288,14 @@ private:
                 const Vec3d n0 = (u - x).cross(w - x), n1 = (u - q).cross(w - q);
                 const double turn = n0.dot(n1), l0 = n0.lengthSqr(), l1 = n1.lengthSqr();
                 if (!(l1 > 0) || turn < 0 || turn * turn < kMaxTurnCos2 * l0 * l1) return false;
-                // thinner than kMinQuality, and than it was (quality: see isThinner)
-                const double uw = (u - w).lengthSqr();
-                const double s1 = (u - q).lengthSqr() + (w - q).lengthSqr() + uw;
-                if (12 * l1 < kMinQuality * kMinQuality * s1 * s1) {
-                    const double s0 = (u - x).lengthSqr() + (w - x).lengthSqr() + uw;
-                    if (l1 * s0 * s0 < l0 * s1 * s1) return false;
+                // an angle under kThinAngleDegrees, smaller than it was (see kThinSin2)
+                const double uw = (u - w).lengthSqr(), uq = (u - q).lengthSqr(),
+                             wq = (w - q).lengthSqr();
+                const double sides1 = uw * uq * wq, short1 = std::min({uw, uq, wq});
+                if (l1 * short1 < kThinSin2 * sides1) {
+                    const double ux = (u - x).lengthSqr(), wx = (w - x).lengthSqr();
+                    const double sides0 = uw * ux * wx, short0 = std::min({uw, ux, wx});
+                    if (l1 * short1 * sides0 < l0 * short0 * sides1) return false;
                 }
             }
         }
