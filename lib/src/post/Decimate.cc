@@ -31,11 +31,8 @@
 // - leave a triangle with an angle under kThinAngleDegrees (MeshCheck.h: what checkMesh counts
 //   as thin) that was not already thinner (slivers);
 // - carry a vertex farther from the input than DecimateTarget::maxDrift (see State::drift);
-// - move the surface by more than DecimateTarget::maxStep, either way (Block::withinStep): the
-//   new point, the old ends and triangle middles, and the new edges' middles.
-//   Without the last, collapses across a ridge or a sheet's rim cut it between the points, by
-//   0.56 voxel on the 1.7M-particle frame at t = 0.5 s, where every point stayed within 0.4.
-//   A flat fan passes without a point tested (Block::isFlat): seven collapses in ten there.
+// - move the surface by more than DecimateTarget::maxStep, either way (post/StepGuard: the new
+//   point, the old ends and triangle middles, and the new edges' middles).
 // The shape guards run first: they refuse nine collapses in ten of those refused, and cheaply.
 //
 // Set-up costs count on two cores: a block numbers its vertices in the order they first appear
@@ -45,6 +42,7 @@
 
 #include "post/Normals.h"
 #include "post/Quadric.h"
+#include "post/StepGuard.h"
 
 #include "util/TriangleDistance.h"
 
@@ -171,6 +169,7 @@ public:
     {
         BlockResult out;
         mThreshold = threshold, mMaxDrift = target.maxDrift, mMaxStep = target.maxStep;
+        mStep = StepGuard(mMaxStep);
         std::vector<Entry> entries; // made a heap at once: cheaper than pushing one by one
         entries.reserve(3 * mTris.size() / 2);
         for (size_t t = 0; t < mTris.size(); ++t)
@@ -330,24 +329,17 @@ private:
             const double l0 = n0.length();
             if (l0 > 0) drift = std::max(drift, std::abs(n0.dot(q - x)) / l0 + far(t));
         };
-        mOld.clear(), mOldIds.clear(), mAfter.clear(), mNewIds.clear(), mFar.clear();
-        // the two that go, first (see withinStep): each a segment from q to its far corner now
+        mStep.start(q);
+        // the two that go, first (see StepGuard): each a segment from q to its far corner now
         for (int g = 0; g < 2; ++g) {
             const Tri& tri = mTris[shared[g]];
             const Vec3d &x = point(tri[0]), &u = point(tri[1]), &w = point(tri[2]);
             driftTo(x, u, w, tri);
-            if (!stepBound) continue;
-            mOld.emplace_back(x, u, w);
-            mOldIds.push_back(tri);
-            // the old triangle's middle, standing for the surface it covered: near the same
-            // triangle moved when that moved it less than the bound; a segment has none
-            const Vec3d middle = (x + u + w) / 3.0, c = point(opposite[g]);
-            if (((q + q + c) / 3.0 - middle).length() > mMaxStep)
-                mFar.push_back({middle, kNone, opposite[g]}); // by its far corner, as a rule
+            if (stepBound) mStep.addGone(tri, x, u, w, opposite[g], point(opposite[g]));
         }
-        // the others, (v, u, w) with only v moving from x to q; mAfter[i] is mOld[i + 2] moved
+        // the others, (v, u, w) with only v moving from x to q
         for (const uint32_t v : {a, b}) {
-            if (v == b) mFromB = uint32_t(mAfter.size());
+            if (v == b) mStep.startSecondFan();
             const Vec3d x = point(v);
             for (uint32_t t : v == a ? mTa : mTb) {
                 if (t == shared[0] || t == shared[1]) continue;
@@ -356,17 +348,11 @@ private:
                 const Tri ids{v, tri[(k + 1) % 3], tri[(k + 2) % 3]};
                 const Vec3d &u = point(ids[1]), &w = point(ids[2]);
                 driftTo(x, u, w, tri);
-                if (!stepBound) continue;
-                if ((q - x).length() > 3 * mMaxStep) // its middle moved a third of that
-                    mFar.push_back({(x + u + w) / 3.0, uint32_t(mAfter.size()), ids[1]});
-                mOld.emplace_back(x, u, w);
-                mOldIds.push_back(ids);
-                mAfter.push_back({q, u, w, x});
-                mNewIds.push_back(ids); // v's id stands for q's: only the others are asked
+                if (stepBound) mStep.addMoved(ids, x, u, w);
             }
         }
         if (drift > mMaxDrift) return false;
-        if (stepBound && !withinStep(a, b, col.point)) return false;
+        if (stepBound && !mStep.accepts(point(a), point(b))) return false;
         error = col.error;
 
         // commit: b merges into a
@@ -394,112 +380,6 @@ private:
         return true;
     }
 
-    /// DecimateTarget::maxStep: the new point p near an old triangle (one of the two the edge
-    /// leaves, as a rule); the old surface near the new: each old end, and each old triangle's
-    /// middle (standing for the surface it covered; collapse() put those that moved far into
-    /// mFar) near a new triangle; and the new surface near the old (below). mOld holds the old
-    /// fan (the two that go first), mAfter the new one.
-    bool withinStep(uint32_t a, uint32_t b, const Vec3d& p)
-    {
-        const double bound = mMaxStep, bound2 = bound * bound;
-        if (isFlat(a, b, p)) return true;
-        bool nearOld = false;
-        for (uint32_t v : {a, b}) // an end that moves less than the bound is near all new
-            if ((point(v) - p).length() <= bound)
-                nearOld = true;
-            else
-                mFar.push_back({point(v), v == a ? 0u : mFromB, kNone}); // its fan first
-        for (size_t i = 0; i < mOld.size() && !nearOld; ++i)
-            nearOld = mOld[i].within(p, bound2);
-        if (!nearOld) return false;
-        mNew.clear();
-        for (const auto& t : mAfter)
-            mNew.emplace_back(t[0], t[1], t[2]);
-        if (!nearAll(mFar, mNew, mNewIds, bound2)) return false;
-        // and the new surface near the old between the points too: the middles of the new
-        // edges out of p. A collapse across a ridge cuts it there, not at a point, and Loop's
-        // edge points sit at those middles. Each is near the old edge it came from when the
-        // moving corner moved less than twice the bound. (The new triangles' middles too refused
-        // nothing once these were checked, on the 1.7M-particle frames.)
-        mFar.clear();
-        for (size_t i = 0; i < mAfter.size(); ++i) // (p, u, w, where p's corner was)
-            if ((p - mAfter[i][3]).length() > 2 * bound)
-                mFar.push_back({(p + mAfter[i][1]) * 0.5, uint32_t(i + 2), mNewIds[i][1]});
-        return nearAll(mFar, mOld, mOldIds, bound2);
-    }
-
-    /// Whether the collapse moves a flat fan within itself, so that no point need be tested
-    /// (seven collapses in ten on the 1.7M-particle frames): every corner, p included, lies in a
-    /// slab no thicker than the bound, every triangle of the old fan and the new faces the
-    /// slab's normal, and the new fan goes round p once. Then the new fan is a graph over the
-    /// region its ring bounds in the slab's plane (a simple polygon: star-shaped around p), and
-    /// so is the old one, whose every triangle faces the normal and whose border is the same
-    /// ring; each point of either has a point of the other straight above or below it, within
-    /// the slab.
-    bool isFlat(uint32_t a, uint32_t b, const Vec3d& p) const
-    {
-        Vec3d n(0.0); // the old fan's area-weighted normal
-        for (const NearTriangle& t : mOld)
-            n += t.normal();
-        const double len = n.length();
-        if (!(len > 0)) return false;
-        n /= len;
-        for (const NearTriangle& t : mOld)
-            if (!(t.normal().dot(n) > 0)) return false;
-        const Vec3d x = point(a);
-        double lo = 0, hi = (point(b) - x).dot(n);
-        if (hi < lo) std::swap(lo, hi);
-        auto inSlab = [&](const Vec3d& q) {
-            const double d = (q - x).dot(n);
-            lo = std::min(lo, d), hi = std::max(hi, d);
-            return hi - lo <= mMaxStep;
-        };
-        if (!inSlab(p)) return false;
-        // round p once: the ring's sides that cross a ray from p, in the slab's plane (each
-        // crossing counts once in the ring's turning sense, all triangles facing n)
-        const Vec3d e = std::abs(n[0]) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
-        const Vec3d across = n.cross(e); // the ray runs along n x across, from p
-        size_t crossings = 0;
-        for (const auto& t : mAfter) { // (p, u, w) with u -> w a side of the ring
-            if (!((t[1] - p).cross(t[2] - p).dot(n) > 0) || !inSlab(t[1]) || !inSlab(t[2]))
-                return false;
-            crossings += (t[1] - p).dot(across) < 0 && (t[2] - p).dot(across) >= 0;
-        }
-        return crossings == 1;
-    }
-
-    /// A point to find near a fan: the triangle to try first (kNone: none) and a ring vertex
-    /// it lies by (kNone: none), whose triangles come next.
-    struct Sample
-    {
-        Vec3d q;
-        uint32_t own, hint;
-    };
-
-    /// Each sample within the bound of one of the triangles (ids: their corners).
-    static bool nearAll(const std::vector<Sample>& samples,
-                        const std::vector<NearTriangle>& triangles, const std::vector<Tri>& ids,
-                        double bound2)
-    {
-        const size_t n = triangles.size();
-        for (const Sample& s : samples) {
-            auto byHint = [&](size_t i) {
-                return s.hint != kNone &&
-                       (ids[i][0] == s.hint || ids[i][1] == s.hint || ids[i][2] == s.hint);
-            };
-            const size_t own = s.own == kNone ? n : s.own;
-            bool near = own < n && triangles[own].within(s.q, bound2);
-            for (size_t i = 0; i < n && !near; ++i)
-                near = i != own && byHint(i) && triangles[i].within(s.q, bound2);
-            for (size_t j = 0; j < n && !near; ++j) { // from the own one on, round
-                const size_t i = own < n ? (own + 1 + j) % n : j;
-                near = i != own && !byHint(i) && triangles[i].within(s.q, bound2);
-            }
-            if (!near) return false;
-        }
-        return true;
-    }
-
     State& mS;
     std::vector<uint32_t> mGlobal; ///< local vertex -> mesh vertex
     std::vector<Tri> mTris;        ///< in local vertices
@@ -509,11 +389,7 @@ private:
     std::vector<uint32_t> mVersion;              ///< bumped when a vertex moves or goes
     std::priority_queue<Entry> mHeap;
     double mThreshold = 0, mMaxDrift = 0, mMaxStep = 0;
-    std::vector<std::array<Vec3d, 4>> mAfter; // the new fan (p, u, w), and where p's corner was
-    std::vector<Sample> mFar;                 // points to find near the other fan
-    std::vector<Tri> mOldIds, mNewIds;        // the corners of mOld's and mAfter's triangles
-    uint32_t mFromB = 0;                      // mAfter's triangles from b's fan start here
-    std::vector<NearTriangle> mOld, mNew;     // the old and new fan, set up for withinStep
+    StepGuard mStep{0};          ///< the fans of the collapse being tried (DecimateTarget::maxStep)
     std::vector<uint32_t> mMark; ///< per vertex: the stamp of the last neighbour walk it was in
     uint32_t mStamp = 0;
     std::vector<uint32_t> mTa, mTb, mTc; // scratch
