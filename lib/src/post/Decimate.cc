@@ -496,6 +496,116 @@ Blocks sortIntoBlocks(const State& s, double side, double shift)
     return b;
 }
 
+/// The side of a pass' blocks: ~kBlockEdges mean edges across, so that their borders are a
+/// small part; 1,000 blocks across at most.
+double blockSide(const State& s)
+{
+    const size_t n = s.triangles.size();
+    // (a deterministic reduction: fixed chunks added in a fixed tree, for any thread count)
+    const double edgeSum = tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<size_t>(0, n, 4096), 0.0,
+        [&](const tbb::blocked_range<size_t>& r, double sum) {
+            for (size_t t = r.begin(); t != r.end(); ++t)
+                sum += (s.points[s.triangles[t][1]] - s.points[s.triangles[t][0]]).length();
+            return sum;
+        },
+        std::plus<double>());
+    const double reach = tbb::parallel_reduce( // the points are centred: max |coordinate|
+        tbb::blocked_range<size_t>(0, s.points.size()), 0.0,
+        [&](const tbb::blocked_range<size_t>& r, double m) {
+            for (size_t v = r.begin(); v != r.end(); ++v)
+                for (int k = 0; k < 3; ++k)
+                    m = std::max(m, std::abs(s.points[v][k]));
+            return m;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    return std::max(kBlockEdges * std::max(edgeSum / double(std::max<size_t>(n, 1)), 1e-30),
+                    2.02 * reach / 1000);
+}
+
+/// A pass' threshold and each block's share of the collapses still needed.
+struct Shares
+{
+    double threshold;
+    bool allEdges;              ///< no threshold was drawn: every edge under the bound is in play
+    std::vector<size_t> budget; ///< collapses per block
+};
+
+/// The threshold from the edges of every kSample-th triangle (a quarter of the work for the
+/// same quantiles): the rankFactor * needed cheapest collapses lie under it; each block's share
+/// in proportion to its sampled edges under it, or (`last`) to its triangles.
+Shares shareOut(const State& s, const Blocks& blocks, double maxError, size_t needed, bool last,
+                double rankFactor)
+{
+    const size_t n = s.triangles.size(), nb = blocks.start.size() - 1;
+    const std::vector<uint32_t>& tris = blocks.tris;
+    const std::vector<size_t>& blockStart = blocks.start;
+    Shares sh{maxError, true, std::vector<size_t>(nb, 0)};
+    std::vector<float> errors; // by block order; infinite where not sampled
+    if (!last) {
+        errors.assign(3 * n, std::numeric_limits<float>::infinity());
+        tbb::parallel_for(
+            tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
+                for (size_t i = r.begin(); i != r.end(); ++i)
+                    for (int k = 0; k < 3 && i % kSample == 0; ++k) {
+                        const Tri& t = s.triangles[tris[i]];
+                        if (t[k] < t[(k + 1) % 3])
+                            errors[3 * i + k] = float(bestCollapse(s, t[k], t[(k + 1) % 3]).error);
+                    }
+            });
+        std::vector<float> sorted;
+        sorted.reserve(3 * n / 2 / kSample);
+        for (float e : errors)
+            if (e <= maxError && std::isfinite(e)) sorted.push_back(e);
+        const double rank = rankFactor * double(needed) / kSample;
+        if (rank < double(sorted.size())) {
+            std::nth_element(sorted.begin(), sorted.begin() + size_t(rank), sorted.end());
+            sh.threshold = std::min(sh.threshold, double(sorted[size_t(rank)]));
+            sh.allEdges = false;
+        }
+    }
+    std::vector<size_t> under(nb, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nb), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b)
+            if (last)
+                under[b] = blockStart[b + 1] - blockStart[b];
+            else
+                for (size_t i = 3 * blockStart[b]; i < 3 * blockStart[b + 1]; ++i)
+                    under[b] += errors[i] <= sh.threshold;
+    });
+    size_t total = 0;
+    for (size_t u : under)
+        total += u;
+    size_t given = 0;
+    for (size_t b = 0; b < nb; ++b)
+        given += sh.budget[b] = total ? size_t(double(needed) * double(under[b]) / total) : 0;
+    for (size_t b = 0; b < nb && given < needed; ++b) // what rounding down left
+        if (under[b] > 0) ++sh.budget[b], ++given;
+    return sh;
+}
+
+/// The state's mesh: the points its triangles use, in their old order (`kept`, if given: their
+/// indices in the input).
+TriangleMesh compact(const State& s, std::vector<uint32_t>* kept)
+{
+    TriangleMesh out;
+    std::vector<uint32_t> index(s.points.size(), UINT32_MAX);
+    if (kept) kept->clear();
+    for (const Tri& t : s.triangles)
+        for (uint32_t v : t)
+            index[v] = 0;
+    for (size_t v = 0; v < s.points.size(); ++v)
+        if (index[v] == 0) {
+            index[v] = uint32_t(out.points.size());
+            out.points.push_back(toVec3f(s.points[v] + s.middle));
+            if (kept) kept->push_back(uint32_t(v));
+        }
+    out.triangles.reserve(s.triangles.size());
+    for (const Tri& t : s.triangles)
+        out.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
+    return out;
+}
+
 } // namespace
 
 TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateStats* stats,
@@ -516,28 +626,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
                                                      : 0;
         if (needed == 0 || n == 0) break;
 
-        // blocks: ~kBlockEdges mean edges across, so that their borders are a small part
-        // (a deterministic reduction: fixed chunks added in a fixed tree, for any thread count)
-        const double edgeSum = tbb::parallel_deterministic_reduce(
-            tbb::blocked_range<size_t>(0, n, 4096), 0.0,
-            [&](const tbb::blocked_range<size_t>& r, double sum) {
-                for (size_t t = r.begin(); t != r.end(); ++t)
-                    sum += (s.points[s.triangles[t][1]] - s.points[s.triangles[t][0]]).length();
-                return sum;
-            },
-            std::plus<double>());
-        double side = kBlockEdges * std::max(edgeSum / double(n), 1e-30);
-        const double reach = tbb::parallel_reduce( // the points are centred: max |coordinate|
-            tbb::blocked_range<size_t>(0, s.points.size()), 0.0,
-            [&](const tbb::blocked_range<size_t>& r, double m) {
-                for (size_t v = r.begin(); v != r.end(); ++v)
-                    for (int k = 0; k < 3; ++k)
-                        m = std::max(m, std::abs(s.points[v][k]));
-                return m;
-            },
-            [](double a, double b) { return std::max(a, b); });
-        side = std::max(side, 2.02 * reach / 1000); // 1,000 blocks across at most
-        const Blocks blocks = sortIntoBlocks(s, side, pass % 2 ? 0.5 : 0.0);
+        const Blocks blocks = sortIntoBlocks(s, blockSide(s), pass % 2 ? 0.5 : 0.0);
         const std::vector<uint32_t>& tris = blocks.tris;
         const std::vector<size_t>& blockStart = blocks.start;
         const size_t nb = blockStart.size() - 1;
@@ -552,55 +641,10 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
         // of 9,000 collapses for a needed 49,000 on the t0.50 1.69M frame; a fifth saves it, 4%
         // of the chain's work, with the same fidelity.)
         const bool last = countTarget && needed * kLastShare < n;
-        // the pass' threshold, and each block's share of the collapses still needed, from the
-        // edges of every kSample-th triangle (a quarter of the work for the same quantiles)
-        double threshold = target.maxError;
-        bool allEdges = true;
-        std::vector<size_t> budget(nb, SIZE_MAX);
-        if (countTarget) {
-            std::vector<float> errors; // by block order; infinite where not sampled
-            if (!last) {
-                errors.assign(3 * n, std::numeric_limits<float>::infinity());
-                tbb::parallel_for(
-                    tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
-                        for (size_t i = r.begin(); i != r.end(); ++i)
-                            for (int k = 0; k < 3 && i % kSample == 0; ++k) {
-                                const Tri& t = s.triangles[tris[i]];
-                                if (t[k] < t[(k + 1) % 3])
-                                    errors[3 * i + k] =
-                                        float(bestCollapse(s, t[k], t[(k + 1) % 3]).error);
-                            }
-                    });
-                std::vector<float> sorted;
-                sorted.reserve(3 * n / 2 / kSample);
-                for (float e : errors)
-                    if (e <= target.maxError && std::isfinite(e)) sorted.push_back(e);
-                const double rank = rankFactor * double(needed) / kSample;
-                if (rank < double(sorted.size())) {
-                    std::nth_element(sorted.begin(), sorted.begin() + size_t(rank), sorted.end());
-                    threshold = std::min(threshold, double(sorted[size_t(rank)]));
-                    allEdges = false;
-                }
-            }
-            std::vector<size_t> under(nb, 0);
-            tbb::parallel_for(
-                tbb::blocked_range<size_t>(0, nb), [&](const tbb::blocked_range<size_t>& r) {
-                    for (size_t b = r.begin(); b != r.end(); ++b)
-                        if (last)
-                            under[b] = blockStart[b + 1] - blockStart[b];
-                        else
-                            for (size_t i = 3 * blockStart[b]; i < 3 * blockStart[b + 1]; ++i)
-                                under[b] += errors[i] <= threshold;
-                });
-            size_t total = 0;
-            for (size_t u : under)
-                total += u;
-            size_t given = 0;
-            for (size_t b = 0; b < nb; ++b)
-                given += budget[b] = total ? size_t(double(needed) * double(under[b]) / total) : 0;
-            for (size_t b = 0; b < nb && given < needed; ++b) // what rounding down left
-                if (under[b] > 0) ++budget[b], ++given;
-        }
+        const Shares shares =
+            countTarget ? shareOut(s, blocks, target.maxError, needed, last, rankFactor)
+                        : Shares{target.maxError, true, std::vector<size_t>(nb, SIZE_MAX)};
+        const std::vector<size_t>& budget = shares.budget;
 
         std::vector<BlockResult> results(nb);
         tbb::parallel_for(
@@ -613,7 +657,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
                     }
                     Block block(s, &tris[blockStart[b]], blockStart[b + 1] - blockStart[b], valence,
                                 localOf.local());
-                    results[b] = block.run(threshold, target, budget[b]);
+                    results[b] = block.run(shares.threshold, target, budget[b]);
                 }
             });
         size_t collapses = 0;
@@ -631,7 +675,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
             // everything under the bound was tried: once with each block offset is enough
             // unless a pass still finds work
             if (pass >= 1 && collapses <= n / 1000) break;
-        } else if (allEdges) {
+        } else if (shares.allEdges) {
             idle = collapses ? 0 : idle + 1;
             if (idle == 2) break; // nothing left that the guards allow, with either offset
         } else if (4 * collapses < needed) {
@@ -639,22 +683,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
         }
     }
 
-    // the result: used points in their old order
-    TriangleMesh out;
-    std::vector<uint32_t> index(s.points.size(), UINT32_MAX);
-    if (kept) kept->clear();
-    for (const Tri& t : s.triangles)
-        for (uint32_t v : t)
-            index[v] = 0;
-    for (size_t v = 0; v < s.points.size(); ++v)
-        if (index[v] == 0) {
-            index[v] = uint32_t(out.points.size());
-            out.points.push_back(toVec3f(s.points[v] + s.middle));
-            if (kept) kept->push_back(uint32_t(v));
-        }
-    out.triangles.reserve(s.triangles.size());
-    for (const Tri& t : s.triangles)
-        out.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
+    TriangleMesh out = compact(s, kept);
     if (stats) *stats = st; // no normals: see Normals.h
     return out;
 }
