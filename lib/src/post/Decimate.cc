@@ -435,8 +435,7 @@ State makeState(TriangleMesh& mesh)
             Quadric q{};
             for (uint32_t i = around.start[v]; i < around.start[v + 1]; ++i) {
                 const Tri& t = s.triangles[around.tris[i]];
-                const Vec3d n =
-                    (s.points[t[1]] - s.points[t[0]]).cross(s.points[t[2]] - s.points[t[0]]);
+                const Vec3d n = sideCross(s.points, t);
                 const double len = n.length();
                 if (len > 0) q += Quadric::plane(n / len, s.points[t[0]], len / 2);
             }

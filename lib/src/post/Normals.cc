@@ -66,11 +66,11 @@ void AreaNormals::compute(const std::vector<Vec3d>& p)
 {
     const auto& tris = mMesh.triangles;
     mCross.resize(tris.size());
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, tris.size()), [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t t = r.begin(); t != r.end(); ++t)
-                mCross[t] = (p[tris[t][1]] - p[tris[t][0]]).cross(p[tris[t][2]] - p[tris[t][0]]);
-        });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tris.size()),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t t = r.begin(); t != r.end(); ++t)
+                              mCross[t] = sideCross(p, tris[t]);
+                      });
     mNormals.resize(p.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size()),
                       [&](const tbb::blocked_range<size_t>& r) {

@@ -33,6 +33,25 @@ void computeAngleWeightedNormals(TriangleMesh& mesh);
 /// The same with mesh's vertex -> triangle table at hand.
 void computeAngleWeightedNormals(TriangleMesh& mesh, const VertexTriangles& around);
 
+/// Triangle t's side cross product (b - a) x (c - a) at points p (Vec3f or Vec3d, indexed by
+/// point): its normal, twice its area long.
+template <typename Points> Vec3d sideCross(const Points& p, const std::array<uint32_t, 3>& t)
+{
+    const Vec3d a = toVec3dAny(p[t[0]]);
+    return (toVec3dAny(p[t[1]]) - a).cross(toVec3dAny(p[t[2]]) - a);
+}
+
+/// Point v's area-weighted normal at points p, not normalised: the sum of its triangles' side
+/// cross products (each computed here: no buffer the size of the mesh).
+template <typename Points>
+Vec3d areaNormal(const Points& p, const TriangleMesh& mesh, const VertexTriangles& around, size_t v)
+{
+    Vec3d n(0.0);
+    for (uint32_t i = around.start[v]; i < around.start[v + 1]; ++i)
+        n += sideCross(p, mesh.triangles[around.tris[i]]);
+    return n;
+}
+
 /// Area-weighted vertex normals at points of one's own (the mesh's triangles, other positions):
 /// each vertex's sum of its triangles' side cross products, not normalised. Cheap (no angles:
 /// each triangle's cross product once), for steps that need only a direction. Keeps its buffers

@@ -153,12 +153,7 @@ void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Com
     mesh.normals.resize(nv);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
-            Vec3d n(0.0);
-            for (uint32_t i = around.start[v]; i < around.start[v + 1]; ++i) {
-                const auto& t = mesh.triangles[around.tris[i]];
-                const Vec3d a = toVec3d(mesh.points[t[0]]);
-                n += (toVec3d(mesh.points[t[1]]) - a).cross(toVec3d(mesh.points[t[2]]) - a);
-            }
+            const Vec3d n = areaNormal(mesh.points, mesh, around, v);
             const double len = n.length();
             mesh.normals[v] = ofPoint[v] != kNoComponent && len > 0
                                   ? toVec3f(n * (offset[ofPoint[v]] / len))
