@@ -58,6 +58,14 @@ void Params::validate() const
         throw ValueError("color-field threshold must be a finite number >= 0");
     if (!std::isfinite(colorGradientThreshold) || colorGradientThreshold < 0)
         throw ValueError("color-gradient threshold must be a finite number >= 0");
+    if (adaptive && method != FieldMethod::NarrowBand)
+        throw ValueError("the adaptive grid runs with the narrow-band method only");
+    if (!std::isfinite(curvatureThreshold) || curvatureThreshold < 0)
+        throw ValueError("curvature threshold must be a finite number >= 0 (got " +
+                         std::to_string(curvatureThreshold) + ")");
+    if (!std::isfinite(levelTolerance) || levelTolerance < 0)
+        throw ValueError("level tolerance must be a finite number >= 0 (got " +
+                         std::to_string(levelTolerance) + ")");
     // The field kernel reads particles up to R from a vertex; a voxel many times smaller than
     // the particles only multiplies work and memory without adding detail.
     if (voxelSize < radius / 64)

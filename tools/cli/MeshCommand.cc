@@ -121,6 +121,21 @@ void addPostCounts(const PostProcessStats& s, std::vector<std::pair<std::string,
     counts.push_back({"decimate_error_voxels", s.decimateError});
 }
 
+/// --stats and -v counts of the adaptive mesher: triangles per level, crack patches (cells per
+/// level too where no field counts give them).
+void addAdaptiveCounts(const AdaptiveMeshStats& s,
+                       std::vector<std::pair<std::string, double>>& counts, bool cells)
+{
+    if (cells) {
+        counts.push_back({"level2_cells", double(s.level2Cells)});
+        counts.push_back({"level3_cells", double(s.level3Cells)});
+    }
+    counts.push_back({"level2_triangles", double(s.level2Triangles)});
+    counts.push_back({"level3_triangles", double(s.level3Triangles)});
+    counts.push_back({"patch_triangles", double(s.patchTriangles)});
+    counts.push_back({"open_cracks", double(s.openCracks)});
+}
+
 /// Decimation, smoothing and subdivision, for the commands that post-process a mesh.
 void addPostOptions(CLI::App* cmd, PipelineOptions& o)
 {
@@ -174,16 +189,25 @@ Runner addMeshCommand(CLI::App& app)
         "  fluidsurf mesh smoke.vdb --grid surface --mesher openvdb -o surface.ply\n"
         "  fluidsurf mesh 'vdb/f_{:04}.vdb' -o 'obj/f_{:04}.obj' --frames 1-100\n"
         "Reads any VDB level set (ours or another tool's); meshes its zero crossing with\n"
-        "outward (counter-clockwise) triangles and vertex normals from the field gradient.");
+        "outward (counter-clockwise) triangles and vertex normals from the field gradient.\n"
+        "A file from 'reconstruct --adaptive --vdb' (grids surface, surface_fine, levels) is\n"
+        "meshed adaptively, as reconstruct meshes it (--grid NAME meshes one grid alone).");
     return [o]() {
         const Mesher mesher = mesherFromName(o->pipeline.mesher);
         return runMeshFrames(*o, "mesh", [&](const std::string& input, Context& ctx, auto& counts) {
-            openvdb::FloatGrid::Ptr grid;
+            io::LevelSetFile file;
             {
                 const auto t = ctx.scope("read");
-                grid = io::readLevelSet(input, o->grid);
+                file = io::readLevelSetFile(input, o->grid);
             }
             stopIfInterrupted(ctx);
+            if (!file.adaptive.empty()) {
+                AdaptiveMeshStats as;
+                TriangleMesh mesh = meshAdaptiveGrid(file.adaptive, ctx, &as);
+                addAdaptiveCounts(as, counts, true);
+                return mesh;
+            }
+            const openvdb::FloatGrid::Ptr grid = file.grid;
             MeshStats ms;
             TriangleMesh mesh = meshLevelSet(*grid, mesher, ctx, &ms);
             counts.push_back({"surface_cells", double(ms.surfaceCells)});
@@ -277,6 +301,7 @@ Runner addReconstructCommand(CLI::App& app)
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj --vdb frame.vdb --check\n"
         "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'obj/f_{:04}.obj' --frames 1-100\n"
         "  fluidsurf reconstruct frame.bgeo -o frame.obj -v --stats frame.json   (r estimated)\n"
+        "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.ply --adaptive --vdb frame.vdb\n"
         "The same field as 'rasterize' (all its options), then marching cubes.\n"
         "Ctrl-C stops cleanly (exit code 130): no partial file is left.");
     return [o]() {
@@ -305,7 +330,9 @@ Runner addReconstructCommand(CLI::App& app)
                 io::OutputGroup outputs;
                 if (!vdbJobs.empty()) {
                     const auto t = ctx.scope("write vdb");
-                    io::writeLevelSet({res.levelSet}, outputs.add(vdbJobs[i].output));
+                    io::writeLevelSet(res.adaptiveGrid.empty() ? openvdb::GridPtrVec{res.levelSet}
+                                                               : res.adaptiveGrid.grids(),
+                                      outputs.add(vdbJobs[i].output));
                 }
                 if (!po.quiet && !bar.enabled() && (res.field.isolated || ri.droppedNonFinite))
                     std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",
@@ -313,7 +340,10 @@ Runner addReconstructCommand(CLI::App& app)
                                 isolatedFate(params, res).c_str(), ri.droppedNonFinite);
                 warnIfEmpty(jobs[i].input, ps, res.field, params.radius, res.mesh.empty());
                 std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
-                counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
+                if (res.adaptiveGrid.empty())
+                    counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
+                else
+                    addAdaptiveCounts(res.adaptiveMesh, counts, false);
                 addPostCounts(res.post, counts);
                 counts.push_back({"isolated_spheres", double(res.isolatedSpheres)});
                 writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,

@@ -112,6 +112,21 @@ void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
                   "use r for every particle even with pscale");
     cmd->add_flag("--keep-isolated", f.keepIsolated,
                   "isolated particles become spheres of radius r in the grid");
+    cmd->add_flag("--adaptive", f.adaptive,
+                  "curvature-adaptive 3-level grid (thesis ch. 6): flat parts at 2 voxels, "
+                  "curved parts and splashes at --voxel; .vdb output holds the grids surface "
+                  "(2 voxels), surface_fine (1 voxel) and levels (4 voxels)");
+    cmd->add_option("--curvature-threshold", f.curvatureThreshold,
+                    "with --adaptive: mean particle curvature (thesis eq. 6.1-6.3) from which a "
+                    "coarse cell gets the finest level; lower keeps more detail")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--level-tolerance", f.levelTolerance,
+                    "with --adaptive: a flat cell is refined too where the field on its surface "
+                    "differs from the coarse grid's interpolation by more than this, in voxels "
+                    "(0: curvature alone, as in the thesis)")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
 }
 
 void addRunOptions(CLI::App* cmd, PipelineOptions& o, Makes makes)
@@ -231,16 +246,24 @@ ParticleSet readFrame(const PipelineOptions& o, Context& ctx, const std::string&
 
 std::vector<std::pair<std::string, double>> fieldCounts(const RasterizeStats& s)
 {
-    return {{"particles", double(s.particles)},
-            {"interior", double(s.interior)},
-            {"surface", double(s.surface)},
-            {"splash", double(s.splash)},
-            {"isolated", double(s.isolated)},
-            {"active_voxels", double(s.activeVoxels)},
-            {"leaves", double(s.leaves)},
-            {"field_evaluations", double(s.fieldEvaluations)},
-            {"band_completion", double(s.bandCompletion)},
-            {"band_half_width", s.bandWidth}};
+    std::vector<std::pair<std::string, double>> counts = {
+        {"particles", double(s.particles)},
+        {"interior", double(s.interior)},
+        {"surface", double(s.surface)},
+        {"splash", double(s.splash)},
+        {"isolated", double(s.isolated)},
+        {"active_voxels", double(s.activeVoxels)},
+        {"leaves", double(s.leaves)},
+        {"field_evaluations", double(s.fieldEvaluations)},
+        {"band_completion", double(s.bandCompletion)},
+        {"band_half_width", s.bandWidth}};
+    if (s.level2Cells + s.level3Cells)
+        counts.insert(counts.end(), {{"level2_cells", double(s.level2Cells)},
+                                     {"level3_cells", double(s.level3Cells)},
+                                     {"level3_completion_cells", double(s.completionCells)},
+                                     {"level3_refined_cells", double(s.refinedCells)},
+                                     {"subsampled_values", double(s.subsampled)}});
+    return counts;
 }
 
 std::vector<std::pair<std::string, double>> meshCounts(const MeshReport& r)

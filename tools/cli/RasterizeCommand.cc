@@ -68,7 +68,9 @@ Runner addRasterizeCommand(CLI::App& app)
                     rasterizeParticles(ps, params.fieldParams(params.radius), ctx, jobs[i].input);
                 {
                     const auto t = ctx.scope("write");
-                    io::writeLevelSet({res.grid}, jobs[i].output);
+                    io::writeLevelSet(res.adaptive.empty() ? openvdb::GridPtrVec{res.grid}
+                                                           : res.adaptive.grids(),
+                                      jobs[i].output);
                 }
                 ctx.timing().finish();
                 const RasterizeStats& s = res.stats;

@@ -48,6 +48,22 @@ struct Params
                                ///< (default: left out of the grid and reported)
     FieldKind field = FieldKind::Ssp07;
     FieldMethod method = FieldMethod::NarrowBand;
+    /// The curvature-adaptive 3-level grid of thesis chapter 6 (fluidsurf/AdaptiveGrid.h):
+    /// voxelSize becomes the finest level (3); flat parts of the surface are sampled at
+    /// 2 * voxelSize. Narrow-band method only.
+    bool adaptive = false;
+    /// Mean particle curvature kappa (thesis eq. 6.1-6.3) at and above which a coarse cell is
+    /// refined to the finest level; dimensionless (see adaptive/Curvature.h).
+    double curvatureThreshold = 3.0;
+    /// Also refined: a flat cell where the field, probed at the finest level on its surface,
+    /// differs from what the level-2 grid interpolates by more than this many finest voxels (the
+    /// surface would move about as far). 0: curvature alone decides, as in the thesis.
+    double levelTolerance = 0.15;
+    /// Also refined: cells near a particle with fewer neighbours within h than this - one-layer
+    /// sheets, jets and droplets (8-12 neighbours in a flat layer, 32 inside the fluid), which
+    /// the coarser level can lose whole. The thesis refines near splash particles
+    /// (splashNeighbours) only; this is never below that.
+    int thinNeighbours = 13;
 
     /// The DESIGN.md defaults for particle radius r.
     static Params fromRadius(double r);

@@ -7,6 +7,10 @@
 //   -> narrow band (active voxels near surface particles) -> field (gather) -> complete band
 //   -> level set
 //
+// With Params::adaptive (thesis ch. 6, AdaptiveGrid.h): classified on the CPU, then particle
+// curvature, the band at 2 voxels (field, completion), the level map of coarse cells, and the
+// points each level needs, all evaluated by the same backend; the result holds the three grids.
+//
 // The stages up to the field run on the Context's backend (lib/src/backend): the CPU (TBB), or
 // with Device::Cuda (or Auto and a GPU) the GPU, which gives the same active voxels and classes
 // and values within 1e-5 r of the CPU's. Band completion asks the same backend for its new
@@ -14,6 +18,7 @@
 // result. The output is identical for any thread count (Context::setThreads).
 #pragma once
 
+#include <fluidsurf/AdaptiveGrid.h>
 #include <fluidsurf/Context.h>
 #include <fluidsurf/Params.h>
 #include <fluidsurf/ParticleSet.h>
@@ -47,11 +52,16 @@ struct RasterizeStats
     /// CUDA events, inside the host stages of the timing tree.
     std::vector<StageTime> gpuStages;
     size_t gpuBytes = 0; ///< peak device memory the CUDA stages held
+    /// With Params::adaptive: coarse cells per level (after completion), cells added by the
+    /// level-3 completion, level-3 values sub-sampled from level 2 (fluidsurf/AdaptiveGrid.h).
+    size_t level2Cells = 0, level3Cells = 0, completionCells = 0, subsampled = 0;
+    size_t refinedCells = 0; ///< flat cells refined where level 2 missed (levelTolerance)
 };
 
 struct RasterizeResult
 {
-    openvdb::FloatGrid::Ptr grid;
+    openvdb::FloatGrid::Ptr grid;            ///< with Params::adaptive, adaptive.level2
+    AdaptiveGrid adaptive;                   ///< with Params::adaptive: all three grids
     std::vector<uint32_t> isolatedParticles; ///< left out of the grid: indices into the input,
                                              ///< ascending (empty with keepIsolated)
     RasterizeStats stats;

@@ -1,8 +1,11 @@
 // Reconstruct.h - the whole reconstruction as one call (DESIGN.md, "Pipeline and layout"):
 //
 //   particles -> radius choice -> rasterizeParticles (neighbors, classify, narrow band, field,
-//   level set) -> meshLevelSet (marching cubes) -> post-processing (ch. 5: isolated particles
-//   as spheres; decimation and subdivision to come) -> result
+//   level set) -> meshLevelSet (marching cubes) -> post-processing (ch. 5: decimation,
+//   smoothing, Loop subdivision, isolated particles as spheres) -> result
+//
+// With field.adaptive, rasterizeParticles builds the 3-level grid of ch. 6 and
+// meshAdaptiveGrid (AdaptiveGrid.h) meshes it instead of meshLevelSet.
 //
 // Front ends (the CLI, the benchmark, later Python) are thin layers over this header; the two
 // halves, rasterizeParticles (Rasterize.h) and meshLevelSet (MeshLevelSet.h), stay public.
@@ -34,11 +37,6 @@ struct MeshParams
     Mesher mesher = Mesher::MarchingCubes;
 };
 
-/// The curvature-adaptive 3-level grid (thesis chapter 6): to come.
-struct AdaptiveParams
-{
-};
-
 struct ReconstructParams
 {
     /// r, world units: the particle radius (half the rest spacing). 0: chosen from the frame by
@@ -49,7 +47,6 @@ struct ReconstructParams
     Params field = Params::fromRadius(1);
     MeshParams mesh;
     PostProcessParams post;
-    AdaptiveParams adaptive;
 
     /// The DESIGN.md defaults for particle radius r.
     static ReconstructParams fromRadius(double r);
@@ -78,6 +75,10 @@ RadiusChoice chooseRadius(const ParticleSet& particles, double given, bool useAt
 struct ReconstructResult
 {
     openvdb::FloatGrid::Ptr levelSet; ///< the "surface" level set (Rasterize.h)
+    /// With field.adaptive: the three grids of the 3-level grid (levelSet is its level 2), and
+    /// what the adaptive mesher made (AdaptiveGrid.h).
+    AdaptiveGrid adaptiveGrid;
+    AdaptiveMeshStats adaptiveMesh;
     TriangleMesh mesh;
     std::vector<uint32_t> isolatedParticles; ///< input indices left out of the surface
     /// Of them, appended to mesh as spheres (IsolatedMode::Spheres): all but those too far from

@@ -22,13 +22,15 @@ openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string&
     return readLevelSetFromMemory(bytes.data(), bytes.size(), path, gridName);
 }
 
-openvdb::FloatGrid::Ptr readLevelSetFromMemory(const uint8_t* data, size_t size,
-                                               const std::string& path, const std::string& gridName)
+namespace {
+
+/// The grid to mesh among grids (see readLevelSet).
+openvdb::FloatGrid::Ptr pickLevelSet(const openvdb::GridPtrVec& grids, const std::string& path,
+                                     const std::string& gridName)
 {
-    const openvdb::GridPtrVecPtr grids = io_internal::readVdbGrids(data, size, path);
     openvdb::FloatGrid::Ptr levelSet, anyFloat;
     std::string names;
-    for (const openvdb::GridBase::Ptr& g : *grids) {
+    for (const openvdb::GridBase::Ptr& g : grids) {
         names += (names.empty() ? "" : ", ") + g->getName() + " (" + g->valueType() + ", " +
                  openvdb::GridBase::gridClassToString(g->getGridClass()) + ")";
         auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(g);
@@ -55,6 +57,25 @@ openvdb::FloatGrid::Ptr readLevelSetFromMemory(const uint8_t* data, size_t size,
         throw InputError(path + ": grid '" + levelSet->getName() +
                          "' has a background that is not finite");
     return levelSet;
+}
+
+} // namespace
+
+openvdb::FloatGrid::Ptr readLevelSetFromMemory(const uint8_t* data, size_t size,
+                                               const std::string& path, const std::string& gridName)
+{
+    return pickLevelSet(*io_internal::readVdbGrids(data, size, path), path, gridName);
+}
+
+LevelSetFile readLevelSetFile(const std::string& path, const std::string& gridName)
+{
+    const std::vector<uint8_t> bytes = io_internal::readFile(path);
+    const openvdb::GridPtrVecPtr grids =
+        io_internal::readVdbGrids(bytes.data(), bytes.size(), path);
+    LevelSetFile f;
+    if (gridName.empty()) f.adaptive = AdaptiveGrid::fromGrids(*grids, path);
+    f.grid = f.adaptive.empty() ? pickLevelSet(*grids, path, gridName) : f.adaptive.level2;
+    return f;
 }
 
 namespace {

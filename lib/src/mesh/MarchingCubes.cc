@@ -1,6 +1,7 @@
 // MarchingCubes.cc - marching cubes over the active band (see MarchingCubes.h for the passes).
 #include "mesh/MarchingCubes.h"
 
+#include "mesh/CellPolygons.h"
 #include "mesh/Gradient.h"
 #include "mesh/LeafBits.h"
 
@@ -26,51 +27,6 @@ using FloatLeaf = FloatTree::LeafNodeType;
 /// Per active voxel: (number of the first vertex on its +x/+y/+z edges) << 3 | crossing-axis bits.
 using IndexTree = openvdb::Int64Tree;
 using IndexLeaf = IndexTree::LeafNodeType;
-
-// Corner n of a cell is at offset (n & 1, n >> 1 & 1, n >> 2 & 1).
-constexpr int kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0},
-                               {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}};
-// Faces, corners counter-clockwise seen from outside the cell: -x, +x, -y, +y, -z, +z.
-constexpr int kFace[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
-                             {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
-
-// The 12 cell edges: edge (a, b) of adjacent corners has index edgeIndex[a][b]; its lower
-// corner and axis locate the grid edge (and so the vertex) it shares with other cells.
-struct EdgeTable
-{
-    int index[8][8];
-    int lowCorner[12], axis[12];
-    EdgeTable()
-    {
-        int n = 0;
-        for (int a = 0; a < 8; ++a)
-            for (int b = 0; b < 8; ++b)
-                index[a][b] = -1;
-        for (int a = 0; a < 8; ++a)
-            for (int bit = 0; bit < 3; ++bit) {
-                if (a >> bit & 1) continue;
-                const int b = a | 1 << bit;
-                index[a][b] = index[b][a] = n;
-                lowCorner[n] = a, axis[n] = bit;
-                ++n;
-            }
-    }
-};
-const EdgeTable kEdges;
-
-// Crossing points are kept off the corners: a corner value of exactly 0 would otherwise put
-// several vertices on one point and leave zero-area triangles.
-constexpr double kEdgeMargin = 1e-3;
-
-inline bool inside(float v)
-{
-    return v < 0;
-}
-
-inline double crossing(float a, float b)
-{
-    return std::clamp(double(a) / (double(a) - double(b)), kEdgeMargin, 1 - kEdgeMargin);
-}
 
 /// Value and active state of the voxel at local offset (x, y, z) + d of leaf, through the leaf
 /// when it is inside and through the accessor otherwise.
@@ -354,45 +310,15 @@ struct Passes
         return surfaceCells;
     }
 
-    // The polygons of one cell. On each face, a segment runs from the edge where the walk
-    // (counter-clockwise seen from outside the cell) enters the inside to the edge where it
-    // leaves; such segments chain into closed polygons, oriented counter-clockwise seen from
-    // outside the fluid. A face with four crossings pairs them by the sign of the bilinear
-    // saddle value, the same in both cells of the face.
-    // A polygon is fanned from its first vertex, except in a cell with such an ambiguous face:
-    // there two polygon vertices on that face may be joined by a fan diagonal in both cells,
-    // which would give that edge four triangles. Those polygons get a centre vertex instead.
+    // The polygons of one cell (CellPolygons.h). A polygon is fanned from its first vertex,
+    // except in a cell with an ambiguous face, where it gets a centre vertex instead.
     template <typename IndexAccessor>
     void cell(const Coord& origin, const float c[8], const IndexLeaf& indexLeaf, IndexAccessor& idx,
               const TriangleMesh& mesh, LeafMesh& out) const
     {
-        int next[12];
-        std::fill(next, next + 12, -1);
-        bool ambiguous = false;
-        for (const auto& face : kFace) {
-            int enter[2], leave[2], ne = 0, nl = 0;
-            for (int k = 0; k < 4; ++k) {
-                const int a = face[k], b = face[(k + 1) & 3];
-                if (inside(c[a]) == inside(c[b])) continue;
-                if (inside(c[b]))
-                    enter[ne++] = k;
-                else
-                    leave[nl++] = k;
-            }
-            if (ne == 0) continue;
-            auto edge = [&](int k) { return kEdges.index[face[k]][face[(k + 1) & 3]]; };
-            if (ne == 1) {
-                next[edge(enter[0])] = edge(leave[0]);
-                continue;
-            }
-            ambiguous = true;
-            const double v0 = c[face[0]], v1 = c[face[1]], v2 = c[face[2]], v3 = c[face[3]];
-            const double saddle = (v0 * v2 - v1 * v3) / (v0 + v2 - v1 - v3);
-            const int step =
-                inside(float(saddle)) ? 3 : 1; // inside joined: previous edge; else next
-            for (int e = 0; e < 2; ++e)
-                next[edge(enter[e])] = edge((enter[e] + step) & 3);
-        }
+        const CellPolygons polygons(c);
+        const int* next = polygons.next;
+        const bool ambiguous = polygons.ambiguous;
         uint32_t vertex[12];
         for (int e = 0; e < 12; ++e) {
             if (next[e] < 0) continue;
@@ -407,17 +333,12 @@ struct Passes
             const int axis = kEdges.axis[e];
             vertex[e] = uint32_t((packed >> 3) + kBitCount[packed & ((1 << axis) - 1)]);
         }
-        bool done[12] = {};
-        for (int start = 0; start < 12; ++start) {
-            if (next[start] < 0 || done[start]) continue;
-            int polygon[12], n = 0;
-            for (int e = start; !done[e]; e = next[e])
-                done[e] = true, polygon[n++] = e;
+        polygons.forEach([&](const int* polygon, int n) {
             if (!ambiguous || n == 3) {
                 for (int k = 1; k + 1 < n; ++k)
                     out.triangles.push_back(
                         {vertex[polygon[0]], vertex[polygon[k]], vertex[polygon[k + 1]]});
-                continue;
+                return;
             }
             openvdb::Vec3d p(0.0), nrm(0.0);
             for (int k = 0; k < n; ++k) {
@@ -431,7 +352,7 @@ struct Passes
             out.normals.push_back(Vec3f(float(nrm.x()), float(nrm.y()), float(nrm.z())));
             for (int k = 0; k < n; ++k)
                 out.triangles.push_back({centre, vertex[polygon[k]], vertex[polygon[(k + 1) % n]]});
-        }
+        });
     }
 };
 

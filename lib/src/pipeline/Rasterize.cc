@@ -3,6 +3,9 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/Rasterize.h>
 
+#include "adaptive/Curvature.h"
+#include "adaptive/LevelFields.h"
+#include "adaptive/LevelMap.h"
 #include "backend/Backend.h"
 #include "backend/CpuStages.h"
 #include "field/CompleteBand.h"
@@ -40,6 +43,7 @@ struct Run
     const Level& level;
     Context& ctx;
     RasterizeResult& result;
+    float maxRadius;
 
     /// The band with phi, completed where a zero crossing reaches its edge (thesis ch. 4).
     openvdb::FloatTree::Ptr narrowBand(backend::Backend& b)
@@ -89,6 +93,76 @@ struct Run
         b.useParticles(index);
         stats.fieldEvaluations = b.evaluate(*tree, params, level, ctx);
         return tree;
+    }
+
+    /// The 3-level grid (thesis ch. 6): classified on the CPU (the curvature needs the classes),
+    /// the level-2 band at 2 dx evaluated and completed by the backend, the level map, then
+    /// the points each level needs (adaptive/). Returns the level-3 tree; level2 is set.
+    openvdb::FloatTree::Ptr adaptive(backend::Backend& b, openvdb::FloatTree::Ptr& level2,
+                                     adaptive::LevelTree::Ptr& levels)
+    {
+        RasterizeStats& stats = result.stats;
+        backend::Band band;
+        backend::Classified c = backend::classifyOnCpu(particles, params, ctx, band);
+        take(band);
+        std::vector<float> kappa;
+        {
+            const auto t = ctx.scope("curvature");
+            kappa = adaptive::particleCurvature(c.index, c.classes, params, ctx);
+        }
+        // The field's particles: the index without its isolated ones (the classes and kappa
+        // stay in the full index's order for the level map).
+        neighbors::CellIndex selected;
+        const neighbors::CellIndex* fieldIndex = &c.index;
+        if (c.classes.isolated && !params.keepIsolated) {
+            std::vector<uint8_t> keep(c.classes.classes.size());
+            for (size_t i = 0; i < keep.size(); ++i)
+                keep[i] = c.classes.classes[i] != classify::Isolated;
+            selected = neighbors::selectParticles(c.index, keep);
+            fieldIndex = &selected;
+        }
+        b.useParticles(*fieldIndex);
+        const Level mid{2 * level.voxelSize};
+        {
+            const auto t = ctx.scope("narrow band");
+            const double width = narrowband::effectiveBandWidth(params, mid, maxRadius);
+            const openvdb::MaskTree::Ptr mask =
+                narrowband::buildNarrowBand(c.index, c.classes, params, mid, width, ctx);
+            level2 = std::make_shared<openvdb::FloatTree>(*mask, float(params.background(mid)),
+                                                          openvdb::TopologyCopy());
+        }
+        const field::FieldEvaluator evaluate2 = [&](openvdb::FloatTree& t) {
+            stats.fieldEvaluations += b.evaluate(t, params, mid, ctx);
+        };
+        const field::FieldEvaluator evaluate3 = [&](openvdb::FloatTree& t) {
+            stats.fieldEvaluations += b.evaluate(t, params, level, ctx);
+        };
+        {
+            const auto t = ctx.scope("field");
+            evaluate2(*level2);
+        }
+        {
+            const auto t = ctx.scope("complete band");
+            stats.bandCompletion = field::completeBand(*level2, mid, evaluate2, ctx);
+        }
+        {
+            const auto t = ctx.scope("level map");
+            levels = adaptive::buildLevelMap(
+                {*level2, c.index, c.classes, kappa, level.voxelSize, stats.bandWidth,
+                 params.curvatureThreshold,
+                 uint32_t(std::max(params.thinNeighbours, params.splashNeighbours))},
+                ctx);
+        }
+        const auto t = ctx.scope("level fields");
+        adaptive::LevelFieldStats f;
+        openvdb::FloatTree::Ptr level3 = adaptive::fillLevels(
+            *level2, *levels, evaluate2, evaluate3, float(params.background(level)),
+            float(params.levelTolerance * level.voxelSize), ctx, &f);
+        stats.completionCells = f.completionCells, stats.subsampled = f.subsampled;
+        stats.refinedCells = f.refinedCells;
+        for (auto v = levels->cbeginValueOn(); v; ++v)
+            (*v == adaptive::kLevel3 ? stats.level3Cells : stats.level2Cells) += 1;
+        return level3;
     }
 
     void take(backend::Band& band)
@@ -156,10 +230,14 @@ RasterizeResult rasterize(const ParticleSet& ps, const Params& params, Context& 
     const bool reduced = !far.empty();
     const backend::Particles particles{reduced ? keptPositions : ps.positions,
                                        reduced ? keptRadii : radii};
-    openvdb::FloatTree::Ptr tree;
+    openvdb::FloatTree::Ptr tree, fine;
+    adaptive::LevelTree::Ptr levels;
     backend::runOn(device, gpu.usable, gpu.reason, stats, [&](backend::Backend& b) {
-        Run run{particles, params, level, ctx, result};
-        tree = params.method == FieldMethod::NarrowBand ? run.narrowBand(b) : run.baseline(b);
+        Run run{particles, params, level, ctx, result, maxRadius};
+        if (params.adaptive)
+            fine = run.adaptive(b, tree, levels);
+        else
+            tree = params.method == FieldMethod::NarrowBand ? run.narrowBand(b) : run.baseline(b);
     });
     if (reduced) {
         for (uint32_t& i : result.isolatedParticles)
@@ -174,8 +252,22 @@ RasterizeResult rasterize(const ParticleSet& ps, const Params& params, Context& 
     info.particles = ps.size();
     info.isolated = result.isolatedParticles.size();
     info.source = source;
-    result.grid = levelset::finishLevelSet(tree, params, level,
-                                           params.method != FieldMethod::NarrowBand, info, ctx);
+    if (params.adaptive) {
+        AdaptiveGrid& a = result.adaptive;
+        a.level2 =
+            levelset::finishLevelSet(tree, params, Level{2 * level.voxelSize}, false, info, ctx);
+        a.level3 = levelset::finishLevelSet(fine, params, level, false, info, ctx);
+        a.level3->setName(AdaptiveGrid::kLevel3Name);
+        a.levels = openvdb::Int32Grid::create(levels);
+        a.levels->setTransform(Level{4 * level.voxelSize}.transform());
+        a.levels->setName(AdaptiveGrid::kLevelsName);
+        a.levels->insertMeta("fluidsurf:curvature_threshold",
+                             openvdb::DoubleMetadata(params.curvatureThreshold));
+        result.grid = a.level2;
+    } else {
+        result.grid = levelset::finishLevelSet(tree, params, level,
+                                               params.method != FieldMethod::NarrowBand, info, ctx);
+    }
     stats.activeVoxels = result.grid->activeVoxelCount();
     stats.leaves = result.grid->tree().leafCount();
     return result;

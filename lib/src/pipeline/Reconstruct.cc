@@ -109,13 +109,23 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
         rasterizeParticles(particles, params.fieldParams(res.radius.radius), ctx, sourceName);
     ctx.throwIfCancelled();
     res.levelSet = field.grid;
+    res.adaptiveGrid = field.adaptive;
     res.isolatedParticles = std::move(field.isolatedParticles);
     res.field = std::move(field.stats);
-    res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing);
+    if (!res.adaptiveGrid.empty()) {
+        res.mesh = meshAdaptiveGrid(res.adaptiveGrid, ctx, &res.adaptiveMesh);
+        res.meshing.vertices = res.mesh.points.size(),
+        res.meshing.triangles = res.mesh.triangles.size();
+    } else {
+        res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing);
+    }
     ctx.throwIfCancelled();
     const auto postScope = ctx.scope("post"); // always there: timing trees keep one shape
     PostProcessParams post = params.post;
-    if (!(post.voxelSize > 0)) post.voxelSize = res.levelSet->voxelSize()[0];
+    // The finest level's voxel (the adaptive grid's level 3).
+    if (!(post.voxelSize > 0))
+        post.voxelSize =
+            (res.adaptiveGrid.empty() ? res.levelSet : res.adaptiveGrid.level3)->voxelSize()[0];
     res.mesh = postProcessMesh(std::move(res.mesh), post, ctx, &res.post);
     if (params.post.isolated == IsolatedMode::Spheres && !res.isolatedParticles.empty()) {
         const auto t = ctx.scope("isolated spheres");

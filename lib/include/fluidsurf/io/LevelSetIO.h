@@ -2,6 +2,8 @@
 // deterministically, and describing what a .vdb holds (`fluidsurf info`).
 #pragma once
 
+#include <fluidsurf/AdaptiveGrid.h>
+
 #include <openvdb/openvdb.h>
 
 #include <string>
@@ -20,6 +22,15 @@ openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string&
 openvdb::FloatGrid::Ptr readLevelSetFromMemory(const uint8_t* data, size_t size,
                                                const std::string& source,
                                                const std::string& gridName = "");
+
+/// What `fluidsurf mesh` meshes in a .vdb: an adaptive grid (AdaptiveGrid.h) when the file holds
+/// one and no grid name is given (grid is then its level 2), else readLevelSet's grid.
+struct LevelSetFile
+{
+    openvdb::FloatGrid::Ptr grid;
+    AdaptiveGrid adaptive;
+};
+LevelSetFile readLevelSetFile(const std::string& path, const std::string& gridName = "");
 
 /// Write grids to a .vdb (Blosc), atomically (temporary file + rename). The file's UUID is
 /// derived from its content, so equal grids give byte-identical files. OutputError on failure.

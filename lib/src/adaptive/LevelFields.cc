@@ -1,0 +1,295 @@
+// LevelFields.cc - rounds of: masks of the new cells' points, evaluation of what no tree holds
+// yet, copies and sub-samples, then the completion check.
+#include "adaptive/LevelFields.h"
+
+#include <openvdb/tree/LeafManager.h>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+
+namespace fluidsurf {
+namespace adaptive {
+
+namespace {
+
+using FloatTree = openvdb::FloatTree;
+using MaskTree = openvdb::MaskTree;
+
+/// The union of what f(cell, accessor) marks for each cell, built in parallel.
+template <typename F> MaskTree maskOfCells(const std::vector<Coord>& cells, Context& ctx, F f)
+{
+    struct Body
+    {
+        const std::vector<Coord>& cells;
+        Context& ctx;
+        const F& f;
+        MaskTree mask;
+        Body(const std::vector<Coord>& c, Context& x, const F& g) : cells(c), ctx(x), f(g) {}
+        Body(Body& o, tbb::split) : cells(o.cells), ctx(o.ctx), f(o.f) {}
+        void join(Body& o) { mask.topologyUnion(o.mask); }
+        void operator()(const tbb::blocked_range<size_t>& r)
+        {
+            ctx.checkpoint();
+            openvdb::tree::ValueAccessor<MaskTree> acc(mask);
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                f(cells[i], acc);
+        }
+    } body(cells, ctx, f);
+    tbb::parallel_reduce(tbb::blocked_range<size_t>(0, cells.size(), 64), body);
+    return std::move(body.mask);
+}
+
+inline Coord scaled(const Coord& c, int n)
+{
+    return Coord(c.x() * n, c.y() * n, c.z() * n);
+}
+
+/// Calls f(voxel iterator, state) for every active voxel of tree, in parallel over its leaves,
+/// with a State made per leaf (its accessors); f may change the value or switch the voxel off.
+template <typename MakeState, typename F>
+void forEachVoxel(FloatTree& tree, Context& ctx, MakeState makeState, F f)
+{
+    openvdb::tree::LeafManager<FloatTree> leaves(tree);
+    leaves.foreach ([&](FloatTree::LeafNodeType& leaf, size_t) {
+        ctx.checkpoint();
+        auto state = makeState();
+        for (auto v = leaf.beginValueOn(); v; ++v)
+            f(v, state);
+    });
+}
+
+/// The value a level-3 point takes from level 2: copied at a level-2 point (clamped to the
+/// level-3 background, as the field evaluated at level 3 would be), else sub-sampled (one odd
+/// coordinate: the middle of a level-2 edge; two: the centre of a level-2 face).
+float fromLevel2(const Coord& p, openvdb::tree::ValueAccessor<const FloatTree>& level2,
+                 float background3)
+{
+    int odd[3], n = 0;
+    for (int a = 0; a < 3; ++a)
+        if (p[a] & 1) odd[n++] = a;
+    auto at = [&](Coord q) { return level2.getValue(Coord(q.x() >> 1, q.y() >> 1, q.z() >> 1)); };
+    if (n == 0) return std::clamp(at(p), -background3, background3);
+    Coord lo = p, hi = p;
+    lo[odd[0]] -= 1, hi[odd[0]] += 1;
+    if (n == 1) return midValue(at(lo), at(hi));
+    Coord a = lo, b = lo, c = hi, d = hi; // a, c and b, d opposite corners
+    a[odd[1]] -= 1, b[odd[1]] += 1, c[odd[1]] += 1, d[odd[1]] -= 1;
+    return centreValue(at(a), at(b), at(c), at(d));
+}
+
+/// Cells not yet meshed that share a sign-changing boundary edge with cell (at its level:
+/// step 1 in the level-3 tree, step 2 in level-2 coordinates times two).
+void unmeshedNeighbours(const Coord& cell, int level, LevelLookup& levels,
+                        openvdb::tree::ValueAccessor<const FloatTree>& values,
+                        std::vector<Coord>& out)
+{
+    const int n = level == kLevel3 ? 4 : 2; // cells per coarse cell along an axis
+    const Coord origin = scaled(cell, n);
+    for (int a = 0; a < 3; ++a) {
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j <= n; ++j)
+                for (int k = 0; k <= n; ++k) {
+                    const bool onB = j == 0 || j == n, onC = k == 0 || k == n;
+                    if (!onB && !onC) continue; // inside the cell
+                    Coord p = origin;
+                    p[a] += i, p[b] += j, p[c] += k;
+                    Coord q = p;
+                    q[a] += 1;
+                    if ((values.getValue(p) < 0) == (values.getValue(q) < 0)) continue;
+                    for (int db = onB ? -1 : 0; db <= 0; ++db)
+                        for (int dc = onC ? -1 : 0; dc <= 0; ++dc) {
+                            Coord other = cell;
+                            other[b] += j == 0 ? db : -db;
+                            other[c] += k == 0 ? dc : -dc;
+                            if (other != cell && levels.level(other) == 0) out.push_back(other);
+                        }
+                }
+    }
+}
+
+/// Level-3 probes of a level-2 cell near the surface (a corner with |phi| < near): the centre of
+/// each of its level-2 cells with such a corner, and the middle of each level-2 edge with a sign
+/// change or such an end, with what level 2 interpolates there. f(point, value).
+template <typename F>
+void forEachProbe(const Coord& cell, openvdb::tree::ValueAccessor<const FloatTree>& level2,
+                  float near, F&& f)
+{
+    for (int s = 0; s < 8; ++s) {
+        const Coord sub(2 * cell.x() + (s & 1), 2 * cell.y() + (s >> 1 & 1),
+                        2 * cell.z() + (s >> 2)); // level-2 index
+        float c[8];
+        int inside = 0, close = 0;
+        for (int k = 0; k < 8; ++k) {
+            if (!level2.probeValue(
+                    Coord(sub.x() + (k & 1), sub.y() + (k >> 1 & 1), sub.z() + (k >> 2)), c[k]))
+                return;
+            inside += c[k] < 0, close += std::abs(c[k]) < near;
+        }
+        if ((inside == 0 || inside == 8) && close == 0) continue;
+        double mean = 0;
+        for (float v : c)
+            mean += v / 8.0;
+        const Coord p(2 * sub.x(), 2 * sub.y(), 2 * sub.z());
+        f(p + Coord(1, 1, 1), float(mean));
+        for (int k = 0; k < 8; ++k)
+            for (int a = 0; a < 3; ++a)
+                if (!(k >> a & 1) && ((c[k] < 0) != (c[k | 1 << a] < 0) ||
+                                      std::min(std::abs(c[k]), std::abs(c[k | 1 << a])) < near)) {
+                    Coord m(p.x() + 2 * (k & 1), p.y() + 2 * (k >> 1 & 1), p.z() + 2 * (k >> 2));
+                    m[a] += 1;
+                    f(m, midValue(c[k], c[k | 1 << a]));
+                }
+    }
+}
+
+/// Level-2 cells where level 2 misses the field by more than tolerance at a probe become level
+/// 3. Returns the evaluated probes (level-3 values, reused by the level-3 cells).
+FloatTree::Ptr refineWhereLevel2Misses(const FloatTree& level2, LevelTree& levels,
+                                       const field::FieldEvaluator& evaluate3, float background3,
+                                       float tolerance, Context& ctx, LevelFieldStats& s)
+{
+    const float near = 4 * background3 / 3; // two level-3 voxels (background3: three)
+    std::vector<Coord> flat;
+    for (auto v = levels.cbeginValueOn(); v; ++v)
+        if (*v == kLevel2) flat.push_back(v.getCoord());
+    const MaskTree mask = maskOfCells(flat, ctx, [&](const Coord& c, auto& acc) {
+        openvdb::tree::ValueAccessor<const FloatTree> v2(level2);
+        forEachProbe(c, v2, near, [&](const Coord& p, float) { acc.setValueOn(p); });
+    });
+    auto probes = std::make_shared<FloatTree>(mask, background3, openvdb::TopologyCopy());
+    evaluate3(*probes);
+    s.probes = probes->activeVoxelCount();
+    std::vector<char> refine(flat.size(), 0);
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, flat.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+            ctx.checkpoint();
+            openvdb::tree::ValueAccessor<const FloatTree> v2(level2), pr(*probes);
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                forEachProbe(flat[i], v2, near, [&](const Coord& p, float interpolated) {
+                    if (std::abs(pr.getValue(p) - interpolated) > tolerance) refine[i] = 1;
+                });
+        });
+    for (size_t i = 0; i < flat.size(); ++i)
+        if (refine[i]) levels.setValueOn(flat[i], kLevel3), ++s.refinedCells;
+    return probes;
+}
+
+} // namespace
+
+openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels,
+                                   const field::FieldEvaluator& evaluate2,
+                                   const field::FieldEvaluator& evaluate3, float background3,
+                                   float tolerance, Context& ctx, LevelFieldStats* stats)
+{
+    LevelFieldStats s;
+    auto probes = std::make_shared<FloatTree>(background3);
+    bool firstRound = true;
+    auto level3 = std::make_shared<FloatTree>(background3);
+    std::vector<Coord> cells;
+    for (auto v = levels.cbeginValueOn(); v; ++v)
+        cells.push_back(v.getCoord());
+    const float background2 = level2.background();
+    while (!cells.empty()) {
+        // Level 2: the 27 level-2 points of every new cell.
+        MaskTree want2 = maskOfCells(cells, ctx, [](const Coord& c, auto& acc) {
+            for (int i = 0; i < 27; ++i)
+                acc.setValueOn(scaled(c, 2) + Coord(i % 3, i / 3 % 3, i / 9));
+        });
+        want2.topologyDifference(level2);
+        if (!want2.empty()) {
+            FloatTree grown(want2, background2, openvdb::TopologyCopy());
+            evaluate2(grown);
+            s.level2Evaluated += grown.activeVoxelCount();
+            level2.merge(grown);
+        }
+        if (firstRound && tolerance > 0)
+            probes =
+                refineWhereLevel2Misses(level2, levels, evaluate3, background3, tolerance, ctx, s);
+        firstRound = false;
+        // Level 3: the 125 points of every new level-3 cell, split into evaluated and taken from
+        // level 2.
+        std::vector<Coord> fine;
+        {
+            openvdb::tree::ValueAccessor<const LevelTree> acc(levels);
+            for (const Coord& c : cells)
+                if (acc.getValue(c) == kLevel3) fine.push_back(c);
+        }
+        MaskTree want3 = maskOfCells(fine, ctx, [](const Coord& c, auto& acc) {
+            for (int i = 0; i < 125; ++i)
+                acc.setValueOn(scaled(c, 4) + Coord(i % 5, i / 5 % 5, i / 25));
+        });
+        want3.topologyDifference(*level3);
+        FloatTree evaluated(want3, background3, openvdb::TopologyCopy());
+        FloatTree taken(want3, background3, openvdb::TopologyCopy());
+        forEachVoxel(
+            evaluated, ctx, [&] { return LevelLookup(levels); },
+            [](auto& v, LevelLookup& lookup) {
+                const Coord p = v.getCoord();
+                if (!((p.x() | p.y() | p.z()) & 1) || lookup.subsampled(p)) v.setValueOff();
+            });
+        taken.topologyDifference(evaluated);
+        FloatTree reused(*probes); // probes of cells now at level 3: evaluated already
+        reused.topologyIntersection(evaluated);
+        evaluated.topologyDifference(*probes);
+        evaluate3(evaluated);
+        s.level3Evaluated += evaluated.activeVoxelCount();
+        evaluated.merge(reused);
+        {
+            const FloatTree& from = level2;
+            forEachVoxel(
+                taken, ctx, [&] { return openvdb::tree::ValueAccessor<const FloatTree>(from); },
+                [&](auto& v, auto& acc) {
+                    v.setValue(fromLevel2(v.getCoord(), acc, background3));
+                });
+        }
+        std::atomic<size_t> copies{0};
+        {
+            openvdb::tree::LeafManager<FloatTree> leaves(taken);
+            leaves.foreach ([&](const FloatTree::LeafNodeType& leaf, size_t) {
+                size_t n = 0;
+                for (auto v = leaf.cbeginValueOn(); v; ++v) {
+                    const Coord p = v.getCoord();
+                    n += !((p.x() | p.y() | p.z()) & 1);
+                }
+                copies += n;
+            });
+        }
+        s.subsampled += taken.activeVoxelCount() - copies;
+        level3->merge(evaluated);
+        level3->merge(taken);
+
+        // Completion: unmeshed cells across sign-changing boundary edges, added at level 3.
+        std::vector<std::vector<Coord>> found(cells.size());
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, cells.size(), 64),
+                          [&](const tbb::blocked_range<size_t>& r) {
+                              ctx.checkpoint();
+                              LevelLookup lookup(levels);
+                              openvdb::tree::ValueAccessor<const FloatTree> v2(level2), v3(*level3);
+                              for (size_t i = r.begin(); i != r.end(); ++i) {
+                                  const int level = lookup.level(cells[i]);
+                                  unmeshedNeighbours(cells[i], level, lookup,
+                                                     level == kLevel3 ? v3 : v2, found[i]);
+                              }
+                          });
+        std::vector<Coord> added;
+        for (auto& f : found)
+            added.insert(added.end(), f.begin(), f.end());
+        std::sort(added.begin(), added.end());
+        added.erase(std::unique(added.begin(), added.end()), added.end());
+        for (const Coord& c : added)
+            levels.setValueOn(c, kLevel3);
+        s.completionCells += added.size();
+        cells = std::move(added);
+    }
+    if (stats) *stats = s;
+    return level3;
+}
+
+} // namespace adaptive
+} // namespace fluidsurf

@@ -1,0 +1,44 @@
+// LevelMap.h - which coarse cells (4 dx) are meshed, and at which level (thesis §6.2, §6.2.1).
+//
+// Meshed cells: every coarse cell around an edge of the level-2 band (2 dx) whose ends change
+// sign (all cells sharing the edge, so the surface never leaves the meshed cells through a face
+// or edge), and every cell within the band width of a splash particle (< splashNeighbours
+// neighbours: a droplet or jet tip that level 2 may not resolve at all).
+// Level: 3 near a splash particle; otherwise the mean kappa (Curvature.h, eq. 6.3) of the
+// surface particles within the band width of the cell decides, level 3 at or above the
+// threshold, level 2 below. A meshed cell with no surface particle that near (the zero crossing
+// of a concave pocket, CompleteBand.h) is level 3: nothing says it is flat.
+#pragma once
+
+#include "adaptive/Levels.h"
+#include "classify/Classify.h"
+#include "neighbors/CellIndex.h"
+
+#include <fluidsurf/Context.h>
+#include <fluidsurf/Level.h>
+#include <fluidsurf/Params.h>
+
+#include <openvdb/openvdb.h>
+
+#include <vector>
+
+namespace fluidsurf {
+namespace adaptive {
+
+struct LevelMapInput
+{
+    const openvdb::FloatTree& level2; ///< the completed band at 2 dx, with phi
+    const neighbors::CellIndex& particles;
+    const classify::Classification& classes; ///< in the index's cell order
+    const std::vector<float>& kappa;         ///< particleCurvature, same order
+    double dx = 0;                           ///< the finest voxel (level 3)
+    double width = 0;                        ///< the band width at dx (effectiveBandWidth)
+    double threshold = 0;                    ///< kappa at and above which a cell is level 3
+    uint32_t thin = 0; ///< particles with fewer neighbours: level 3 around them (as splash)
+};
+
+/// The coarse cells (voxel 4 dx) with their levels as active values. Parallel, deterministic.
+LevelTree::Ptr buildLevelMap(const LevelMapInput& in, Context& ctx);
+
+} // namespace adaptive
+} // namespace fluidsurf

@@ -1,0 +1,120 @@
+// CellPolygons.h - the polygons of one marching-cubes cell from its 8 corner values, shared by
+// the uniform mesher (MarchingCubes.cc) and the adaptive one (adaptive/MeshLevels.cc), so both
+// cut a face the same way and their meshes meet without gaps.
+//
+// On each face, a segment runs from the edge where the walk (counter-clockwise seen from outside
+// the cell) enters the inside to the edge where it leaves; the segments chain into closed
+// polygons, oriented counter-clockwise seen from outside the fluid. A face with four crossings
+// pairs them by the sign of the bilinear saddle value (the asymptotic decider), which both cells
+// of a face compute from the same four values. That choice also follows the bilinear function
+// itself: a face whose values were sub-sampled bilinearly from a coarser face (the adaptive
+// grid's transition faces, thesis Fig. 6.4) is cut into the same pieces on both resolutions.
+#pragma once
+
+#include <algorithm>
+
+namespace fluidsurf {
+namespace mesh {
+
+// Corner n of a cell is at offset (n & 1, n >> 1 & 1, n >> 2 & 1).
+constexpr int kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0},
+                               {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}};
+// Faces, corners counter-clockwise seen from outside the cell: -x, +x, -y, +y, -z, +z.
+constexpr int kFace[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                             {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+
+// The 12 cell edges: edge (a, b) of adjacent corners has index edgeIndex[a][b]; its lower
+// corner and axis locate the grid edge (and so the vertex) it shares with other cells.
+struct EdgeTable
+{
+    int index[8][8];
+    int lowCorner[12], axis[12];
+    EdgeTable()
+    {
+        int n = 0;
+        for (int a = 0; a < 8; ++a)
+            for (int b = 0; b < 8; ++b)
+                index[a][b] = -1;
+        for (int a = 0; a < 8; ++a)
+            for (int bit = 0; bit < 3; ++bit) {
+                if (a >> bit & 1) continue;
+                const int b = a | 1 << bit;
+                index[a][b] = index[b][a] = n;
+                lowCorner[n] = a, axis[n] = bit;
+                ++n;
+            }
+    }
+};
+inline const EdgeTable kEdges;
+
+// Crossing points are kept off the corners: a corner value of exactly 0 would otherwise put
+// several vertices on one point and leave zero-area triangles.
+constexpr double kEdgeMargin = 1e-3;
+
+inline bool inside(float v)
+{
+    return v < 0;
+}
+
+/// Where the zero crossing lies on an edge from value a to value b, as a fraction of the edge.
+inline double crossing(float a, float b)
+{
+    return std::clamp(double(a) / (double(a) - double(b)), kEdgeMargin, 1 - kEdgeMargin);
+}
+
+/// The polygons of a cell: next[e] is the edge after crossing edge e on its polygon (-1: e has
+/// no crossing), face[e] the cell face (index into kFace) that the segment e -> next[e] lies on.
+struct CellPolygons
+{
+    int next[12], face[12];
+    /// A face with four crossings: fanning a polygon there could join two vertices of that face
+    /// in both cells of the face (an edge with four triangles); such cells fan around a centre.
+    bool ambiguous = false;
+
+    explicit CellPolygons(const float c[8])
+    {
+        std::fill(next, next + 12, -1);
+        for (int f = 0; f < 6; ++f) {
+            const int* corners = kFace[f];
+            int enter[2], leave[2], ne = 0, nl = 0;
+            for (int k = 0; k < 4; ++k) {
+                const int a = corners[k], b = corners[(k + 1) & 3];
+                if (inside(c[a]) == inside(c[b])) continue;
+                if (inside(c[b]))
+                    enter[ne++] = k;
+                else
+                    leave[nl++] = k;
+            }
+            if (ne == 0) continue;
+            auto edge = [&](int k) { return kEdges.index[corners[k]][corners[(k + 1) & 3]]; };
+            if (ne == 1) {
+                next[edge(enter[0])] = edge(leave[0]), face[edge(enter[0])] = f;
+                continue;
+            }
+            ambiguous = true;
+            const double v0 = c[corners[0]], v1 = c[corners[1]], v2 = c[corners[2]],
+                         v3 = c[corners[3]];
+            const double saddle = (v0 * v2 - v1 * v3) / (v0 + v2 - v1 - v3);
+            const int step =
+                inside(float(saddle)) ? 3 : 1; // inside joined: previous edge; else next
+            for (int e = 0; e < 2; ++e)
+                next[edge(enter[e])] = edge((enter[e] + step) & 3), face[edge(enter[e])] = f;
+        }
+    }
+
+    /// Calls polygon(edges, n) for each closed polygon, its crossing edges in order.
+    template <typename F> void forEach(F&& polygon) const
+    {
+        bool done[12] = {};
+        for (int start = 0; start < 12; ++start) {
+            if (next[start] < 0 || done[start]) continue;
+            int edges[12], n = 0;
+            for (int e = start; !done[e]; e = next[e])
+                done[e] = true, edges[n++] = e;
+            polygon(edges, n);
+        }
+    }
+};
+
+} // namespace mesh
+} // namespace fluidsurf

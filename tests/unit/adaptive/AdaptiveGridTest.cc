@@ -1,0 +1,365 @@
+// AdaptiveGridTest.cc - the 3-level grid (thesis ch. 6): the sub-sampling rule against its
+// definition, the level fields against an analytic field (each point evaluated once, copies and
+// sub-samples exact), the mesher closed on analytic spheres under level maps with as many
+// transitions as possible, and the whole path on generated scenes and the real frames: closed,
+// close to the uniform mesh of the finest voxel, the same through a .vdb and for any thread count.
+#include "TestData.h"
+#include "adaptive/LevelFields.h"
+#include "adaptive/Levels.h"
+
+#include <fluidsurf/AdaptiveGrid.h>
+#include <fluidsurf/MeshCheck.h>
+#include <fluidsurf/MeshLevelSet.h>
+#include <fluidsurf/Reconstruct.h>
+#include <fluidsurf/Scenes.h>
+#include <fluidsurf/io/LevelSetIO.h>
+#include <fluidsurf/io/ParticleIO.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+#include <tuple>
+
+namespace fluidsurf {
+namespace {
+
+using adaptive::kLevel2;
+using adaptive::kLevel3;
+using openvdb::Coord;
+
+/// Level maps over the coarse cells [lo, hi]^3: a checkerboard (every face a transition), or
+/// random levels.
+adaptive::LevelTree::Ptr levelMap(int lo, int hi, unsigned seed)
+{
+    auto t = std::make_shared<adaptive::LevelTree>(0);
+    std::mt19937 rng(seed);
+    for (int z = lo; z <= hi; ++z)
+        for (int y = lo; y <= hi; ++y)
+            for (int x = lo; x <= hi; ++x) {
+                const int level = seed == 0 ? ((x + y + z) & 1 ? kLevel3 : kLevel2)
+                                            : (rng() & 1 ? kLevel3 : kLevel2);
+                t->setValueOn(Coord(x, y, z), level);
+            }
+    return t;
+}
+
+TEST(AdaptiveLevels, SubsampledPointsAreThoseOnTheClosedBoxOfALevel2Cell)
+{
+    const auto levels = levelMap(-2, 1, 7);
+    adaptive::LevelLookup lookup(*levels);
+    size_t yes = 0, no = 0;
+    for (int z = -9; z <= 9; ++z)
+        for (int y = -9; y <= 9; ++y)
+            for (int x = -9; x <= 9; ++x) {
+                const Coord p(x, y, z);
+                bool expected = false;
+                if ((x | y | z) & 1)
+                    for (auto v = levels->cbeginValueOn(); v; ++v) {
+                        const Coord c = v.getCoord();
+                        bool in = *v == kLevel2;
+                        for (int a = 0; a < 3; ++a)
+                            in = in && 4 * c[a] <= p[a] && p[a] <= 4 * c[a] + 4;
+                        expected = expected || in;
+                    }
+                ASSERT_EQ(lookup.subsampled(p), expected) << p;
+                (expected ? yes : no) += 1;
+            }
+    EXPECT_GT(yes, 100u);
+    EXPECT_GT(no, 100u);
+}
+
+/// phi of a sphere, exact at world points, clamped to the background like the field.
+struct Sphere
+{
+    openvdb::Vec3d centre;
+    double radius;
+    float value(const openvdb::Vec3d& w, float background) const
+    {
+        const double d = (w - centre).length() - radius;
+        return float(std::clamp(d, -double(background), double(background)));
+    }
+};
+
+/// An evaluator at voxel size dx that records every point it evaluates.
+field::FieldEvaluator analytic(const Sphere& s, double dx, std::multiset<Coord>& seen)
+{
+    return [&s, dx, &seen](openvdb::FloatTree& t) {
+        for (auto v = t.beginValueOn(); v; ++v) {
+            seen.insert(v.getCoord());
+            v.setValue(s.value(v.getCoord().asVec3d() * dx, t.background()));
+        }
+    };
+}
+
+TEST(AdaptiveLevels, EveryPointIsEvaluatedOnceAndTheRestIsCopiedOrSubsampledExactly)
+{
+    const double dx = 0.1;
+    const Sphere sphere{{0.03, -0.02, 0.01}, 0.61};
+    auto levels = levelMap(-2, 1, 3);
+    openvdb::FloatTree level2(float(6 * dx));
+    std::multiset<Coord> seen2, seen3;
+    Context ctx;
+    adaptive::LevelFieldStats stats;
+    const openvdb::FloatTree::Ptr level3 =
+        adaptive::fillLevels(level2, *levels, analytic(sphere, 2 * dx, seen2),
+                             analytic(sphere, dx, seen3), float(3 * dx), 0.f, ctx, &stats);
+    for (const auto* seen : {&seen2, &seen3})
+        for (auto it = seen->begin(); it != seen->end(); it = seen->upper_bound(*it))
+            ASSERT_EQ(seen->count(*it), 1u) << "evaluated twice: " << *it;
+    EXPECT_EQ(stats.level3Evaluated, seen3.size());
+    adaptive::LevelLookup lookup(*levels);
+    auto v2 = [&](const Coord& p) {
+        float v;
+        EXPECT_TRUE(level2.probeValue(Coord(p.x() >> 1, p.y() >> 1, p.z() >> 1), v)) << p;
+        return v;
+    };
+    size_t copied = 0, subsampled = 0, evaluated = 0;
+    for (auto v = level3->cbeginValueOn(); v; ++v) {
+        const Coord p = v.getCoord();
+        int odd[3], n = 0;
+        for (int a = 0; a < 3; ++a)
+            if (p[a] & 1) odd[n++] = a;
+        if (n == 0) {
+            ASSERT_EQ(*v, std::clamp(v2(p), float(-3 * dx), float(3 * dx)));
+            ++copied;
+        } else if (lookup.subsampled(p)) {
+            // linear along the odd axis, or the mean of the face's four corners
+            Coord a = p, b = p;
+            a[odd[0]] -= 1, b[odd[0]] += 1;
+            double expected = 0.5 * (v2(a) + v2(b));
+            if (n == 2) {
+                Coord c = a, d = b, e = a, f = b;
+                c[odd[1]] -= 1, d[odd[1]] -= 1, e[odd[1]] += 1, f[odd[1]] += 1;
+                expected = 0.25 * (double(v2(c)) + v2(d) + v2(e) + v2(f));
+            }
+            ASSERT_EQ(n < 3, true);
+            ASSERT_NEAR(*v, expected, 1e-6) << p;
+            ++subsampled;
+        } else {
+            ASSERT_EQ(*v, sphere.value(p.asVec3d() * dx, float(3 * dx))) << p;
+            ASSERT_EQ(seen3.count(p), 1u);
+            ++evaluated;
+        }
+    }
+    EXPECT_EQ(subsampled, stats.subsampled);
+    EXPECT_GT(copied, 0u);
+    EXPECT_GT(subsampled, 0u);
+    EXPECT_GT(evaluated, 0u);
+    // Every level-3 cell holds all of its 125 points.
+    for (auto v = levels->cbeginValueOn(); v; ++v)
+        if (*v == kLevel3)
+            for (int i = 0; i < 125; ++i)
+                ASSERT_TRUE(level3->isValueOn(Coord(4 * v.getCoord().x() + i % 5,
+                                                    4 * v.getCoord().y() + i / 5 % 5,
+                                                    4 * v.getCoord().z() + i / 25)));
+}
+
+/// The analytic sphere's adaptive grid under a level map, filled by fillLevels.
+AdaptiveGrid sphereGrid(const Sphere& sphere, double dx, adaptive::LevelTree::Ptr levels)
+{
+    auto level2 = std::make_shared<openvdb::FloatTree>(float(6 * dx));
+    std::multiset<Coord> seen2, seen3;
+    Context ctx;
+    auto level3 = adaptive::fillLevels(*level2, *levels, analytic(sphere, 2 * dx, seen2),
+                                       analytic(sphere, dx, seen3), float(3 * dx), 0.f, ctx);
+    AdaptiveGrid g;
+    g.level2 = openvdb::FloatGrid::create(level2);
+    g.level2->setTransform(openvdb::math::Transform::createLinearTransform(2 * dx));
+    g.level3 = openvdb::FloatGrid::create(level3);
+    g.level3->setTransform(openvdb::math::Transform::createLinearTransform(dx));
+    g.levels = openvdb::Int32Grid::create(levels);
+    g.levels->setTransform(openvdb::math::Transform::createLinearTransform(4 * dx));
+    return g;
+}
+
+/// The uniform marching-cubes mesh of the sphere at voxel h over the same box.
+TriangleMesh uniformSphere(const Sphere& sphere, double h, double extent)
+{
+    auto grid = openvdb::FloatGrid::create(float(3 * h));
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(h));
+    const int n = int(std::ceil(extent / h));
+    for (int z = -n; z <= n; ++z)
+        for (int y = -n; y <= n; ++y)
+            for (int x = -n; x <= n; ++x)
+                grid->tree().setValueOn(Coord(x, y, z),
+                                        sphere.value(openvdb::Vec3d(x, y, z) * h, float(3 * h)));
+    grid->setGridClass(openvdb::GRID_LEVEL_SET);
+    return meshLevelSet(*grid);
+}
+
+/// Largest distance of the points from the sphere.
+double offSphere(const TriangleMesh& mesh, const Sphere& sphere)
+{
+    double worst = 0;
+    for (const Vec3f& p : mesh.points)
+        worst = std::max(worst, std::abs((openvdb::Vec3d(p.x, p.y, p.z) - sphere.centre).length() -
+                                         sphere.radius));
+    return worst;
+}
+
+TEST(AdaptiveMesh, SpheresUnderEveryKindOfLevelMapAreClosedAndBetweenTheUniformMeshes)
+{
+    const double dx = 0.1;
+    for (unsigned seed : {0u, 1u, 2u, 3u, 4u})
+        for (const Sphere& sphere :
+             {Sphere{{0.0, 0.0, 0.0}, 0.8}, Sphere{{0.13, -0.07, 0.21}, 0.93},
+              Sphere{{0.4, 0.4, 0.4}, 0.57}}) {
+            const AdaptiveGrid grid = sphereGrid(sphere, dx, levelMap(-3, 2, seed));
+            Context ctx;
+            AdaptiveMeshStats stats;
+            const TriangleMesh mesh = meshAdaptiveGrid(grid, ctx, &stats);
+            const MeshReport report = checkMesh(mesh);
+            SCOPED_TRACE("seed " + std::to_string(seed) + ", radius " +
+                         std::to_string(sphere.radius));
+            EXPECT_TRUE(report.watertight()) << describe(report);
+            EXPECT_EQ(report.components, 1u);
+            EXPECT_EQ(stats.openCracks, 0u);
+            EXPECT_GT(stats.level2Triangles, 0u);
+            EXPECT_GT(stats.level3Triangles, 0u);
+            EXPECT_GT(stats.patchTriangles, 0u); // the maps cut the sphere at many transitions
+            EXPECT_EQ(stats.level2Triangles + stats.level3Triangles + stats.patchTriangles,
+                      mesh.triangles.size());
+            // Off the sphere by about the uniform mesh's at 2 dx: points on a transition face
+            // sit on the bilinear interpolant of a 2 dx face, up to about twice the chord error
+            // of a 2 dx edge. Its volume between the uniform meshes' at 2 dx and dx (marching
+            // cubes' chords cut into the sphere).
+            const TriangleMesh fine = uniformSphere(sphere, dx, 1.3),
+                               coarse = uniformSphere(sphere, 2 * dx, 1.3);
+            EXPECT_LE(offSphere(mesh, sphere), 2.5 * offSphere(coarse, sphere));
+            const double vFine = checkMesh(fine).volume, vCoarse = checkMesh(coarse).volume;
+            ASSERT_LT(vCoarse, vFine);
+            EXPECT_GT(report.volume, vCoarse);
+            EXPECT_LT(report.volume, vFine);
+            ASSERT_EQ(mesh.normals.size(), mesh.points.size());
+        }
+}
+
+ReconstructParams rawParams(double r, bool adaptive)
+{
+    ReconstructParams p = ReconstructParams::fromRadius(r);
+    p.field.adaptive = adaptive;
+    p.post.isolated = IsolatedMode::Drop;
+    p.post.decimate = 0, p.post.smooth = 0, p.post.subdivide = 0;
+    return p;
+}
+
+/// The acceptance on one frame: closed like the uniform mesh, within 0.5 r of it both ways, and
+/// few patch triangles.
+void expectCloseToUniform(const ParticleSet& ps, double r, const std::string& name)
+{
+    SCOPED_TRACE(name);
+    Context ctx;
+    const ReconstructResult uniform = reconstruct(ps, rawParams(r, false), ctx, name);
+    const ReconstructResult adaptive = reconstruct(ps, rawParams(r, true), ctx, name);
+    const MeshReport u = checkMesh(uniform.mesh), a = checkMesh(adaptive.mesh);
+    EXPECT_EQ(a.watertight(), u.watertight()) << describe(a) << " / uniform: " << describe(u);
+    EXPECT_EQ(a.boundaryEdges, 0u);
+    EXPECT_EQ(a.nonManifoldEdges, 0u);
+    EXPECT_EQ(a.misorientedEdges, 0u);
+    EXPECT_EQ(adaptive.adaptiveMesh.openCracks, 0u);
+    const double d = std::max(meshDistance(adaptive.mesh, uniform.mesh, 4 * r),
+                              meshDistance(uniform.mesh, adaptive.mesh, 4 * r));
+    EXPECT_LE(d, 0.5 * r) << "Hausdorff " << d / r << " r";
+    EXPECT_LE(adaptive.mesh.triangles.size(), uniform.mesh.triangles.size());
+}
+
+TEST(AdaptiveReconstruct, GeneratedScenesAreClosedAndWithinHalfARadiusOfTheUniformMesh)
+{
+    for (Scene scene : {Scene::Drop, Scene::Ball, Scene::Slab, Scene::Block}) {
+        SceneParams sp;
+        sp.count = 20000;
+        expectCloseToUniform(generateScene(scene, sp), sp.radius, sceneName(scene));
+    }
+}
+
+TEST(AdaptiveReconstruct, WithEveryCellAtTheFinestLevelItIsTheUniformMesh)
+{
+    // Curvature threshold 0: every meshed cell is level 3, so the cells must cover every
+    // surface cell of the uniform band, and the vertices must be the uniform mesher's (in
+    // another order; within 1e-5 r: the gather sums a point's particles in an order that
+    // depends on the leaf it is evaluated in, which differs between the two grids).
+    SceneParams sp;
+    sp.count = 20000;
+    for (Scene scene : {Scene::Drop, Scene::Slab}) {
+        const ParticleSet ps = generateScene(scene, sp);
+        ReconstructParams all = rawParams(sp.radius, true);
+        all.field.curvatureThreshold = 0;
+        Context ctx;
+        const ReconstructResult a = reconstruct(ps, all, ctx, "a");
+        const ReconstructResult u = reconstruct(ps, rawParams(sp.radius, false), ctx, "u");
+        EXPECT_EQ(a.field.level2Cells, 0u);
+        EXPECT_EQ(a.adaptiveMesh.patchTriangles, 0u);
+        EXPECT_EQ(a.mesh.triangles.size(), u.mesh.triangles.size());
+        ASSERT_EQ(a.mesh.points.size(), u.mesh.points.size());
+        std::vector<Vec3f> uniform = u.mesh.points;
+        auto byX = [](const Vec3f& p, const Vec3f& q) { return p.x < q.x; };
+        std::sort(uniform.begin(), uniform.end(), byX);
+        const float tolerance = float(1e-5 * sp.radius);
+        size_t unmatched = 0;
+        for (const Vec3f& p : a.mesh.points) {
+            bool found = false;
+            for (auto q = std::lower_bound(uniform.begin(), uniform.end(),
+                                           Vec3f{p.x - tolerance, 0, 0}, byX);
+                 q != uniform.end() && q->x <= p.x + tolerance && !found; ++q)
+                found = std::abs(q->y - p.y) <= tolerance && std::abs(q->z - p.z) <= tolerance;
+            unmatched += !found;
+        }
+        EXPECT_EQ(unmatched, 0u) << sceneName(scene);
+    }
+}
+
+TEST(AdaptiveReconstruct, RealFramesAreClosedAndWithinHalfARadiusOfTheUniformMesh)
+{
+    FLUIDSURF_REQUIRE_SHARED_DATA();
+    for (const test::RealFrame& f : test::kRealFrames) {
+        if (!f.fluid) continue;
+        const ParticleSet ps = io::readParticles(test::sharedData() + "/real/" + f.name);
+        expectCloseToUniform(ps, f.radius, f.name);
+    }
+}
+
+TEST(AdaptiveReconstruct, TheVdbMeshesToTheSameMeshForAnyThreadCount)
+{
+    SceneParams sp;
+    sp.count = 20000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    Context all, one;
+    one.setThreads(1);
+    const ReconstructResult a = reconstruct(ps, rawParams(sp.radius, true), all, "drop");
+    const ReconstructResult b = reconstruct(ps, rawParams(sp.radius, true), one, "drop");
+    EXPECT_EQ(a.mesh.points, b.mesh.points);
+    EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+    ASSERT_FALSE(a.adaptiveGrid.empty());
+    EXPECT_EQ(a.levelSet, a.adaptiveGrid.level2);
+    test::TempDir dir;
+    io::writeLevelSet(a.adaptiveGrid.grids(), dir.path("a.vdb"));
+    const io::LevelSetFile file = io::readLevelSetFile(dir.path("a.vdb"));
+    ASSERT_FALSE(file.adaptive.empty());
+    EXPECT_EQ(file.adaptive.level2->getGridClass(), openvdb::GRID_LEVEL_SET);
+    EXPECT_EQ(file.adaptive.level3->getGridClass(), openvdb::GRID_LEVEL_SET);
+    Context ctx;
+    const TriangleMesh again = meshAdaptiveGrid(file.adaptive, ctx);
+    EXPECT_EQ(again.points, a.mesh.points);
+    EXPECT_EQ(again.triangles, a.mesh.triangles);
+    // By name, one grid is an ordinary level set.
+    EXPECT_TRUE(io::readLevelSetFile(dir.path("a.vdb"), "surface_fine").adaptive.empty());
+}
+
+TEST(AdaptiveReconstruct, RefusesTheBaselineMethodsAndABadThreshold)
+{
+    Params p = Params::fromRadius(0.025);
+    p.adaptive = true;
+    p.method = FieldMethod::GatherFull;
+    EXPECT_THROW(p.validate(), ValueError);
+    p.method = FieldMethod::NarrowBand;
+    p.curvatureThreshold = -1;
+    EXPECT_THROW(p.validate(), ValueError);
+    p.curvatureThreshold = 1;
+    EXPECT_NO_THROW(p.validate());
+}
+
+} // namespace
+} // namespace fluidsurf
