@@ -20,15 +20,11 @@ using MaskTree = openvdb::MaskTree;
 struct CrossedCells
 {
     const openvdb::FloatTree& band;
-    float near;
     Context& ctx;
     MaskTree cells;
 
-    CrossedCells(const openvdb::FloatTree& b, float n, Context& c) : band(b), near(n), ctx(c) {}
-    CrossedCells(CrossedCells& other, tbb::split)
-        : band(other.band), near(other.near), ctx(other.ctx)
-    {
-    }
+    CrossedCells(const openvdb::FloatTree& b, Context& c) : band(b), ctx(c) {}
+    CrossedCells(CrossedCells& other, tbb::split) : band(other.band), ctx(other.ctx) {}
     void join(CrossedCells& other) { cells.topologyUnion(other.cells); }
 
     void operator()(const openvdb::tree::LeafManager<const openvdb::FloatTree>::LeafRange& range)
@@ -40,12 +36,6 @@ struct CrossedCells
             for (auto v = leaf->cbeginValueOn(); v; ++v) {
                 const Coord p = v.getCoord(); // level-2 index
                 const bool in = *v < 0;
-                // Near the surface: a feature too small for level 2 (a droplet between its
-                // points) may hide here; the cells around the point are meshed, and probed.
-                if (std::abs(*v) < near)
-                    for (int d = 0; d < 8; ++d)
-                        out.setValueOn(Coord((p.x() - (d & 1)) >> 1, (p.y() - (d >> 1 & 1)) >> 1,
-                                             (p.z() - (d >> 2)) >> 1));
                 for (int a = 0; a < 3; ++a) {
                     Coord q = p;
                     q[a] += 1;
@@ -67,15 +57,11 @@ struct CrossedCells
     }
 };
 
-/// Coarse cells whose box grown by margin holds world point p, as an index box.
-openvdb::CoordBBox cellsNear(const Vec3f& p, double margin, double coarse)
+/// The coarse cell holding world point p.
+Coord cellOf(const Vec3f& p, double coarse)
 {
-    Coord lo, hi;
-    for (int a = 0; a < 3; ++a) {
-        lo[a] = int(std::floor((double(p[a]) - margin) / coarse));
-        hi[a] = int(std::floor((double(p[a]) + margin) / coarse));
-    }
-    return openvdb::CoordBBox(lo, hi);
+    return Coord(int(std::floor(p.x / coarse)), int(std::floor(p.y / coarse)),
+                 int(std::floor(p.z / coarse)));
 }
 
 } // namespace
@@ -83,18 +69,18 @@ openvdb::CoordBBox cellsNear(const Vec3f& p, double margin, double coarse)
 LevelTree::Ptr buildLevelMap(const LevelMapInput& in, Context& ctx)
 {
     const double coarse = 4 * in.dx;
-    CrossedCells crossed(in.level2, float(in.dx), ctx);
+    CrossedCells crossed(in.level2, ctx);
     {
         openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(in.level2);
         tbb::parallel_reduce(leaves.leafRange(), crossed);
     }
-    // Splash and thin particles: few, serial.
+    // Splash and thin particles: few, serial. Their cells only: where their surface leaves the
+    // cell, the completion of the level fields adds the next cell at level 3.
     MaskTree splash;
     for (size_t i = 0; i < in.particles.size(); ++i)
         if (in.classes.classes[i] == classify::Splash ||
             (classify::isSurface(in.classes.classes[i]) && in.classes.neighbours[i] < in.thin))
-            splash.sparseFill(cellsNear(in.particles.positions[i], in.width, coarse), true, true);
-    splash.voxelizeActiveTiles();
+            splash.setValueOn(cellOf(in.particles.positions[i], coarse));
     auto levels = std::make_shared<LevelTree>(crossed.cells, 0, openvdb::TopologyCopy());
     levels->topologyUnion(splash);
     levels->voxelizeActiveTiles();

@@ -1,13 +1,14 @@
 // LevelMap.h - which coarse cells (4 dx) are meshed, and at which level (thesis §6.2, §6.2.1).
 //
 // Meshed cells: every coarse cell around an edge of the level-2 band (2 dx) whose ends change
-// sign (all cells sharing the edge, so the surface never leaves the meshed cells through a face
-// or edge), and every cell within the band width of a splash particle (< splashNeighbours
-// neighbours: a droplet or jet tip that level 2 may not resolve at all).
-// Level: 3 near a splash particle; otherwise the mean kappa (Curvature.h, eq. 6.3) of the
-// surface particles within the band width of the cell decides, level 3 at or above the
-// threshold, level 2 below. A meshed cell with no surface particle that near (the zero crossing
-// of a concave pocket, CompleteBand.h) is level 3: nothing says it is flat.
+// sign (all cells sharing the edge), and every cell holding a splash or thin particle (fewer
+// than `thin` neighbours: a droplet, jet or one-layer sheet that level 2 may not resolve at all).
+// The level fields' completion (LevelFields.h) then adds any cell the surface reaches beyond
+// these, so the band at 2 dx needs no completion of its own.
+// Level: 3 for a cell holding a splash or thin particle; otherwise the mean kappa (Curvature.h,
+// eq. 6.3) of the surface particles within the band width of the cell decides, level 3 at or
+// above the threshold, level 2 below. A meshed cell with no surface particle that near (the zero
+// crossing of a concave pocket, CompleteBand.h) is level 3: nothing says it is flat.
 #pragma once
 
 #include "adaptive/Levels.h"

@@ -293,6 +293,15 @@ TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMe
         const size_t end = std::min(cells.size(), (b + 1) * kCellsPerBlock);
         for (size_t i = b * kCellsPerBlock; i < end; ++i)
             mesher.cell(cells[i].first, cells[i].second, levels, v2, v3, uint32_t(b), blocks[b]);
+        // Most vertices are found by several cells of the block: one record each before the
+        // global sort.
+        auto& v = blocks[b].vertices;
+        std::sort(v.begin(), v.end(),
+                  [](const VertexRecord& x, const VertexRecord& y) { return x.key < y.key; });
+        v.erase(std::unique(
+                    v.begin(), v.end(),
+                    [](const VertexRecord& x, const VertexRecord& y) { return x.key == y.key; }),
+                v.end());
     });
 
     AdaptiveMeshStats s;

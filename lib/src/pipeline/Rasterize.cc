@@ -96,8 +96,9 @@ struct Run
     }
 
     /// The 3-level grid (thesis ch. 6): classified on the CPU (the curvature needs the classes),
-    /// the level-2 band at 2 dx evaluated and completed by the backend, the level map, then
-    /// the points each level needs (adaptive/). Returns the level-3 tree; level2 is set.
+    /// the level-2 band at 2 dx evaluated by the backend, the level map, then the points each
+    /// level needs (adaptive/), whose completion replaces the band's. Returns the level-3 tree;
+    /// level2 is set.
     openvdb::FloatTree::Ptr adaptive(backend::Backend& b, openvdb::FloatTree::Ptr& level2,
                                      adaptive::LevelTree::Ptr& levels)
     {
@@ -140,10 +141,6 @@ struct Run
         {
             const auto t = ctx.scope("field");
             evaluate2(*level2);
-        }
-        {
-            const auto t = ctx.scope("complete band");
-            stats.bandCompletion = field::completeBand(*level2, mid, evaluate2, ctx);
         }
         {
             const auto t = ctx.scope("level map");
