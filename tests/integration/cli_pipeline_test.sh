@@ -72,6 +72,25 @@ assert doc["peak_memory_mib"] > 0
 PY
 check "--stats for a sequence: one entry per frame" bash -c "cp '$T/drop.bgeo' '$T/s_0001.bgeo' && cp '$T/drop.bgeo' '$T/s_0002.bgeo' && '$BIN' rasterize '$T/s_{:04}.bgeo' -r 0.01 -o '$T/s_{:04}.vdb' -q --stats '$T/seq.json' && /usr/bin/python3 -c \"import json; assert len(json.load(open('$T/seq.json'))['frames']) == 2\""
 
+# --- --adaptive: three grids in the .vdb, meshed by `mesh` as reconstruct meshes them ----------
+"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/adaptive.ply" --raw --isolated drop --adaptive \
+    --vdb "$T/adaptive.vdb" --stats "$T/adaptive.json" -q
+out=$("$BIN" info "$T/adaptive.vdb")
+check "adaptive .vdb: level 2 grid" grep -q "grid        'surface'  class level set, type float" <<<"$out"
+check "adaptive .vdb: level 2 voxel" grep -q "voxel size  (0.02, 0.02, 0.02)" <<<"$out"
+check "adaptive .vdb: level 3 grid" grep -q "grid        'surface_fine'  class level set, type float" <<<"$out"
+check "adaptive .vdb: level map" grep -q "grid        'levels'  class unknown, type int32" <<<"$out"
+check "adaptive: the mesh is watertight" bash -c "'$BIN' info '$T/adaptive.ply' | grep -q 'check .*watertight'"
+"$BIN" mesh "$T/adaptive.vdb" -o "$T/adaptive_again.ply" -q
+check "adaptive: mesh of the .vdb is reconstruct's mesh, byte for byte" cmp -s "$T/adaptive.ply" "$T/adaptive_again.ply"
+check "adaptive: --stats counts triangles per level and patches" /usr/bin/python3 -c "
+import json
+c = json.load(open('$T/adaptive.json'))['frames'][0]['counts']
+assert c['level2_cells'] + c['level3_cells'] > 0 and c['open_cracks'] == 0, c
+assert c['level2_triangles'] + c['level3_triangles'] + c['patch_triangles'] == c['raw_triangles'], c"
+expect_error "adaptive: refused with the gather-full baseline" "narrow-band method only" \
+    "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/x.ply" --adaptive --method gather-full
+
 # --- Ctrl-C: exit code 130, one line, nothing written -----------------------------------------
 "$BIN" generate drop --count 1000000 -r 0.01 -o "$T/big.bgeo" >/dev/null
 for cmd in reconstruct rasterize; do
