@@ -113,25 +113,25 @@ void unmeshedNeighbours(const Coord& cell, int level, LevelLookup& levels,
     }
 }
 
-/// Level-3 probes of a level-2 cell near the surface (a corner with |phi| < near): the centre of
-/// each of its level-2 cells with such a corner, and the middle of each level-2 edge with a sign
-/// change or such an end, with what level 2 interpolates there. f(point, value).
+/// Level-3 probes of a level-2 cell where its surface is: the centre of each of its level-2
+/// cells with a sign change and the middle of each level-2 edge with one, with what level 2
+/// interpolates there. f(point, value). (Probing near the surface as well, where a corner is
+/// within two voxels of it, refined nearly every cell of the generated drop for little gain.)
 template <typename F>
-void forEachProbe(const Coord& cell, openvdb::tree::ValueAccessor<const FloatTree>& level2,
-                  float near, F&& f)
+void forEachProbe(const Coord& cell, openvdb::tree::ValueAccessor<const FloatTree>& level2, F&& f)
 {
     for (int s = 0; s < 8; ++s) {
         const Coord sub(2 * cell.x() + (s & 1), 2 * cell.y() + (s >> 1 & 1),
                         2 * cell.z() + (s >> 2)); // level-2 index
         float c[8];
-        int inside = 0, close = 0;
+        int inside = 0;
         for (int k = 0; k < 8; ++k) {
             if (!level2.probeValue(
                     Coord(sub.x() + (k & 1), sub.y() + (k >> 1 & 1), sub.z() + (k >> 2)), c[k]))
                 return;
-            inside += c[k] < 0, close += std::abs(c[k]) < near;
+            inside += c[k] < 0;
         }
-        if ((inside == 0 || inside == 8) && close == 0) continue;
+        if (inside == 0 || inside == 8) continue;
         double mean = 0;
         for (float v : c)
             mean += v / 8.0;
@@ -139,8 +139,7 @@ void forEachProbe(const Coord& cell, openvdb::tree::ValueAccessor<const FloatTre
         f(p + Coord(1, 1, 1), float(mean));
         for (int k = 0; k < 8; ++k)
             for (int a = 0; a < 3; ++a)
-                if (!(k >> a & 1) && ((c[k] < 0) != (c[k | 1 << a] < 0) ||
-                                      std::min(std::abs(c[k]), std::abs(c[k | 1 << a])) < near)) {
+                if (!(k >> a & 1) && (c[k] < 0) != (c[k | 1 << a] < 0)) {
                     Coord m(p.x() + 2 * (k & 1), p.y() + 2 * (k >> 1 & 1), p.z() + 2 * (k >> 2));
                     m[a] += 1;
                     f(m, midValue(c[k], c[k | 1 << a]));
@@ -154,27 +153,27 @@ FloatTree::Ptr refineWhereLevel2Misses(const FloatTree& level2, LevelTree& level
                                        const field::FieldEvaluator& evaluate3, float background3,
                                        float tolerance, Context& ctx, LevelFieldStats& s)
 {
-    const float near = 4 * background3 / 3; // two level-3 voxels (background3: three)
     std::vector<Coord> flat;
     for (auto v = levels.cbeginValueOn(); v; ++v)
         if (*v == kLevel2) flat.push_back(v.getCoord());
     const MaskTree mask = maskOfCells(flat, ctx, [&](const Coord& c, auto& acc) {
         openvdb::tree::ValueAccessor<const FloatTree> v2(level2);
-        forEachProbe(c, v2, near, [&](const Coord& p, float) { acc.setValueOn(p); });
+        forEachProbe(c, v2, [&](const Coord& p, float) { acc.setValueOn(p); });
     });
     auto probes = std::make_shared<FloatTree>(mask, background3, openvdb::TopologyCopy());
     evaluate3(*probes);
     s.probes = probes->activeVoxelCount();
     std::vector<char> refine(flat.size(), 0);
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, flat.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
-            ctx.checkpoint();
-            openvdb::tree::ValueAccessor<const FloatTree> v2(level2), pr(*probes);
-            for (size_t i = r.begin(); i != r.end(); ++i)
-                forEachProbe(flat[i], v2, near, [&](const Coord& p, float interpolated) {
-                    if (std::abs(pr.getValue(p) - interpolated) > tolerance) refine[i] = 1;
-                });
-        });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, flat.size(), 64),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          ctx.checkpoint();
+                          openvdb::tree::ValueAccessor<const FloatTree> v2(level2), pr(*probes);
+                          for (size_t i = r.begin(); i != r.end(); ++i)
+                              forEachProbe(flat[i], v2, [&](const Coord& p, float interpolated) {
+                                  if (std::abs(pr.getValue(p) - interpolated) > tolerance)
+                                      refine[i] = 1;
+                              });
+                      });
     for (size_t i = 0; i < flat.size(); ++i)
         if (refine[i]) levels.setValueOn(flat[i], kLevel3), ++s.refinedCells;
     return probes;
