@@ -3,6 +3,7 @@
 
 #include <fluidsurf/PostProcess.h>
 
+#include <fluidsurf/Params.h>
 #include <fluidsurf/ParticleSet.h>
 
 #include <algorithm>
@@ -60,6 +61,17 @@ struct PostBenchOptions
 };
 
 int runPostBench(const PostBenchOptions& options);
+
+struct AdaptiveBenchOptions
+{
+    std::string scenes = "large,drop-1M";
+    double curvatureThreshold = Params().curvatureThreshold;
+    double levelTolerance = Params().levelTolerance; ///< of the "adaptive" rows
+    int repeat = 3;
+    std::string shared = "../shared/data";
+};
+
+int runAdaptiveBench(const AdaptiveBenchOptions& options);
 
 /// A benchmark scene: a real frame (with its file, for whole-process rows) or a generated one.
 struct Case

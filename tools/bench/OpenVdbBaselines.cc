@@ -7,6 +7,7 @@
 #include <openvdb/points/PointRasterizeSDF.h>
 #include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/ParticlesToLevelSet.h>
+#include <openvdb/tools/VolumeToMesh.h>
 
 namespace fluidsurf {
 namespace bench {
@@ -71,6 +72,25 @@ BaselineResult runSmoothSpheres(const ParticleSet& ps, double radius, double sea
     });
     out.activeVoxels = sdf->activeVoxelCount();
     return out;
+}
+
+TriangleMesh openvdbAdaptiveMesh(const openvdb::FloatGrid& grid, double adaptivity)
+{
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec3I> triangles;
+    std::vector<openvdb::Vec4I> quads;
+    openvdb::tools::volumeToMesh(grid, points, triangles, quads, 0.0, adaptivity);
+    TriangleMesh m;
+    m.points.reserve(points.size());
+    for (const auto& p : points)
+        m.points.push_back(Vec3f(p.x(), p.y(), p.z()));
+    for (const auto& t : triangles)
+        m.triangles.push_back({t.x(), t.y(), t.z()});
+    for (const auto& q : quads) {
+        m.triangles.push_back({q.x(), q.y(), q.z()});
+        m.triangles.push_back({q.x(), q.z(), q.w()});
+    }
+    return m;
 }
 
 } // namespace bench

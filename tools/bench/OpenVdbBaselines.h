@@ -3,7 +3,10 @@
 // (Zhu-Bridson averaged positions). Own translation unit: PointRasterizeSDF.h is heavy.
 #pragma once
 
+#include <fluidsurf/Mesh.h>
 #include <fluidsurf/ParticleSet.h>
+
+#include <openvdb/openvdb.h>
 
 #include <cstddef>
 
@@ -20,6 +23,10 @@ struct BaselineResult
 BaselineResult runParticlesToLevelSet(const ParticleSet& ps, double radius, double voxel);
 BaselineResult runSmoothSpheres(const ParticleSet& ps, double radius, double searchRadius,
                                 double voxel);
+
+/// OpenVDB's tools::volumeToMesh of grid with the given adaptivity (0..1), quads split into
+/// triangles, no normals: the adaptive baseline of the adaptive-grid benchmark.
+TriangleMesh openvdbAdaptiveMesh(const openvdb::FloatGrid& grid, double adaptivity);
 
 } // namespace bench
 } // namespace fluidsurf

@@ -4,6 +4,8 @@
 //   fluidsurf_bench field [--scenes ...]          rasterize stages vs baselines and OpenVDB
 //   fluidsurf_bench mesh [--scenes ...]           meshing stage vs volumeToMesh; whole pipeline
 //   fluidsurf_bench post [--scenes ...]           decimation, smoothing, subdivision (Table 5.1)
+//   fluidsurf_bench adaptive [--scenes ...]       the 3-level grid vs uniform r, 2r
+//   (Tables 6.1-6.3)
 #include "Bench.h"
 
 #include <CLI/CLI.hpp>
@@ -77,6 +79,23 @@ int main(int argc, char** argv)
                      "runs of OpenMesh's serial Decimater per case (0: skip it)")
         ->capture_default_str();
     postCmd->add_option("--shared", post.shared, "../shared/data")->capture_default_str();
+    fluidsurf::bench::AdaptiveBenchOptions adaptive;
+    CLI::App* adaptiveCmd = app.add_subcommand(
+        "adaptive", "the 3-level grid against uniform grids of voxel r and 2r and OpenVDB's "
+                    "adaptive volumeToMesh (thesis Tables 6.1-6.3)");
+    adaptiveCmd
+        ->add_option("--scenes", adaptive.scenes,
+                     "scenes: large, real, hilbert, drop-1M, ... (comma-separated)")
+        ->capture_default_str();
+    adaptiveCmd->add_option("--curvature-threshold", adaptive.curvatureThreshold)
+        ->capture_default_str();
+    adaptiveCmd
+        ->add_option("--level-tolerance", adaptive.levelTolerance,
+                     "of the 'adaptive' rows, in voxels")
+        ->capture_default_str();
+    adaptiveCmd->add_option("--repeat", adaptive.repeat, "runs per case (median)")
+        ->capture_default_str();
+    adaptiveCmd->add_option("--shared", adaptive.shared, "../shared/data")->capture_default_str();
     bool coldAllocator = false;
     app.add_flag(
         "--cold-allocator", coldAllocator,
@@ -94,6 +113,7 @@ int main(int argc, char** argv)
         if (app.got_subcommand("field")) return fluidsurf::bench::runFieldBench(field);
         if (app.got_subcommand("mesh")) return fluidsurf::bench::runMeshBench(mesh);
         if (app.got_subcommand("post")) return fluidsurf::bench::runPostBench(post);
+        if (app.got_subcommand("adaptive")) return fluidsurf::bench::runAdaptiveBench(adaptive);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "fluidsurf_bench: error: %s\n", e.what());
         return 1;

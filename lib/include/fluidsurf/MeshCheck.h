@@ -44,6 +44,11 @@ MeshReport checkMesh(const TriangleMesh& mesh);
 /// larger of meshDistance(a, b) and meshDistance(b, a). 0 for an empty a.
 double meshDistance(const TriangleMesh& a, const TriangleMesh& b, double reach);
 
+/// The mean distance from the points of mesh a (its vertices and triangle centroids, as above)
+/// to mesh b, each exact, a point farther than `reach` counting as reach. 0 for an empty a.
+/// The same for any thread count (summed in point order).
+double meanMeshDistance(const TriangleMesh& a, const TriangleMesh& b, double reach);
+
 /// One line: "V vertices, T triangles, C components, volume, area, problems (or 'watertight')".
 std::string describe(const MeshReport& report);
 

@@ -104,37 +104,77 @@ private:
 
 } // namespace
 
+namespace {
+
+/// Buckets of b's triangles, in cells of about its mean edge (a point's nearest triangles are
+/// then a ring or two away).
+Buckets bucketsOf(const TriangleMesh& b, double reach)
+{
+    double edges = 0;
+    for (const auto& t : b.triangles)
+        edges += (toVec3d(b.points[t[1]]) - toVec3d(b.points[t[0]])).length();
+    return Buckets(b, std::clamp(edges / double(b.triangles.size()), reach / 16, reach));
+}
+
+/// The sample points of a: its used vertices (np of them, i < np), then its triangles' middles.
+bool samplePoint(const TriangleMesh& a, const std::vector<uint8_t>& used, size_t i, Vec3d& p)
+{
+    const size_t np = a.points.size();
+    if (i < np) {
+        if (!used[i]) return false;
+        p = toVec3d(a.points[i]);
+        return true;
+    }
+    const auto& tri = a.triangles[i - np];
+    p = (toVec3d(a.points[tri[0]]) + toVec3d(a.points[tri[1]]) + toVec3d(a.points[tri[2]])) / 3.0;
+    return true;
+}
+
+std::vector<uint8_t> usedPoints(const TriangleMesh& a)
+{
+    std::vector<uint8_t> used(a.points.size(), 0);
+    for (const auto& t : a.triangles)
+        used[t[0]] = used[t[1]] = used[t[2]] = 1;
+    return used;
+}
+
+} // namespace
+
+double meanMeshDistance(const TriangleMesh& a, const TriangleMesh& b, double reach)
+{
+    if (a.triangles.empty()) return 0;
+    if (b.triangles.empty() || !(reach > 0)) return reach > 0 ? reach : 0;
+    const Buckets buckets = bucketsOf(b, reach);
+    const std::vector<uint8_t> used = usedPoints(a);
+    const size_t n = a.points.size() + a.triangles.size();
+    std::vector<double> d(n, -1);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+            Vec3d p;
+            if (samplePoint(a, used, i, p)) d[i] = std::min(buckets(p, reach, 0), reach);
+        }
+    });
+    double sum = 0;
+    size_t count = 0;
+    for (double v : d)
+        if (v >= 0) sum += v, ++count;
+    return count ? sum / double(count) : 0;
+}
+
 double meshDistance(const TriangleMesh& a, const TriangleMesh& b, double reach)
 {
     if (a.triangles.empty()) return 0;
     if (b.triangles.empty() || !(reach > 0)) return std::numeric_limits<double>::infinity();
-    // cells of about an edge: a point's nearest triangles are then a ring or two away
-    double edges = 0;
-    for (const auto& t : b.triangles)
-        edges += (toVec3d(b.points[t[1]]) - toVec3d(b.points[t[0]])).length();
-    const double cell = std::clamp(edges / double(b.triangles.size()), reach / 16, reach);
-    const Buckets buckets(b, cell);
+    const Buckets buckets = bucketsOf(b, reach);
     // a's points each once (those of its triangles), then its triangles' middles, for a middle
     // that bulges away from b; each only as far as it could raise the largest found so far
-    std::vector<uint8_t> used(a.points.size(), 0);
-    for (const auto& t : a.triangles)
-        used[t[0]] = used[t[1]] = used[t[2]] = 1;
-    const size_t np = a.points.size();
+    const std::vector<uint8_t> used = usedPoints(a);
     return tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, np + a.triangles.size()), 0.0,
+        tbb::blocked_range<size_t>(0, a.points.size() + a.triangles.size()), 0.0,
         [&](const tbb::blocked_range<size_t>& r, double worst) {
             for (size_t i = r.begin(); i != r.end(); ++i) {
                 Vec3d p;
-                if (i < np) {
-                    if (!used[i]) continue;
-                    p = toVec3d(a.points[i]);
-                } else {
-                    const auto& tri = a.triangles[i - np];
-                    p = (toVec3d(a.points[tri[0]]) + toVec3d(a.points[tri[1]]) +
-                         toVec3d(a.points[tri[2]])) /
-                        3.0;
-                }
-                worst = std::max(worst, buckets(p, reach, worst));
+                if (samplePoint(a, used, i, p)) worst = std::max(worst, buckets(p, reach, worst));
             }
             return worst;
         },

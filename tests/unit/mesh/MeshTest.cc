@@ -88,6 +88,24 @@ TEST(MeshDistance, ExactToTheNearestTriangle)
     EXPECT_EQ(meshDistance(TriangleMesh(), square, 1.0), 0.0);
 }
 
+TEST(MeshDistance, MeanOverVerticesAndCentroids)
+{
+    // the unit square, and a triangle above it: its three corners and its centroid sample it
+    TriangleMesh square;
+    square.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    square.triangles = {{0, 1, 2}, {0, 2, 3}};
+    TriangleMesh above;
+    above.points = {{0.25f, 0.25f, 0.5f}, {0.75f, 0.25f, 0.5f}, {0.5f, 2.f, 0.5f}};
+    above.triangles = {{0, 1, 2}};
+    // two corners and the centroid (0.5, 0.833, 0.5) lie over the square (0.5 away), the third
+    // 1 beside it: sqrt(1.25)
+    EXPECT_NEAR(meanMeshDistance(above, square, 2.0), (3 * 0.5 + std::sqrt(1.25)) / 4, 1e-6);
+    // beyond reach a point counts as the reach
+    EXPECT_NEAR(meanMeshDistance(above, square, 1.0), (3 * 0.5 + 1.0) / 4, 1e-6);
+    EXPECT_EQ(meanMeshDistance(TriangleMesh(), square, 1.0), 0.0);
+    EXPECT_EQ(meanMeshDistance(square, square, 1.0), 0.0);
+}
+
 TEST(MeshCheck, FindsEachKindOfDefect)
 {
     TriangleMesh open = tetrahedron();
