@@ -113,12 +113,35 @@ void unmeshedNeighbours(const Coord& cell, int level, LevelLookup& levels,
     }
 }
 
+/// How far the surface moves (world units) when a probe's level-3 value v replaces what level 2
+/// interpolates there. On a level-2 edge from value a to b: the crossing itself moves, from the
+/// level-2 edge's to the level-3 half-edge's. At a cell centre: the value's change over the
+/// gradient's length (at least 1/4: phi is about a distance), the gradient from the cell's
+/// corners.
+struct Probe
+{
+    float a = 0, b = 0;     // edge: the end values
+    float interpolated = 0; // centre: the corners' mean
+    double gradient = 0;    // centre: |grad phi|
+    double dx = 0;          // the level-3 voxel
+    bool edge = false;
+    double displacement(float v) const
+    {
+        if (!edge) return std::abs(double(v) - interpolated) / std::max(gradient, 0.25);
+        const double coarse = 2 * double(a) / (double(a) - double(b));
+        const double fine = (a < 0) != (v < 0) ? double(a) / (double(a) - double(v))
+                                               : 1 + double(v) / (double(v) - double(b));
+        return std::abs(coarse - fine) * dx;
+    }
+};
+
 /// Level-3 probes of a level-2 cell where its surface is: the centre of each of its level-2
-/// cells with a sign change and the middle of each level-2 edge with one, with what level 2
-/// interpolates there. f(point, value). (Probing near the surface as well, where a corner is
-/// within two voxels of it, refined nearly every cell of the generated drop for little gain.)
+/// cells with a sign change and the middle of each level-2 edge with one. f(point, Probe).
+/// (Probing near the surface as well, where a corner is within two voxels of it, refined nearly
+/// every cell of the generated drop for little gain.)
 template <typename F>
-void forEachProbe(const Coord& cell, openvdb::tree::ValueAccessor<const FloatTree>& level2, F&& f)
+void forEachProbe(const Coord& cell, openvdb::tree::ValueAccessor<const FloatTree>& level2,
+                  double dx, F&& f)
 {
     for (int s = 0; s < 8; ++s) {
         const Coord sub(2 * cell.x() + (s & 1), 2 * cell.y() + (s >> 1 & 1),
@@ -132,17 +155,25 @@ void forEachProbe(const Coord& cell, openvdb::tree::ValueAccessor<const FloatTre
             inside += c[k] < 0;
         }
         if (inside == 0 || inside == 8) continue;
-        double mean = 0;
-        for (float v : c)
-            mean += v / 8.0;
+        double mean = 0, g[3] = {0, 0, 0};
+        for (int k = 0; k < 8; ++k) {
+            mean += c[k] / 8.0;
+            for (int a = 0; a < 3; ++a)
+                g[a] += (k >> a & 1 ? c[k] : -c[k]) / 8.0; // per level-3 voxel: / 2, times 4 / 8
+        }
+        Probe centre;
+        centre.interpolated = float(mean), centre.dx = dx;
+        centre.gradient = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) / dx;
         const Coord p(2 * sub.x(), 2 * sub.y(), 2 * sub.z());
-        f(p + Coord(1, 1, 1), float(mean));
+        f(p + Coord(1, 1, 1), centre);
         for (int k = 0; k < 8; ++k)
             for (int a = 0; a < 3; ++a)
                 if (!(k >> a & 1) && (c[k] < 0) != (c[k | 1 << a] < 0)) {
                     Coord m(p.x() + 2 * (k & 1), p.y() + 2 * (k >> 1 & 1), p.z() + 2 * (k >> 2));
                     m[a] += 1;
-                    f(m, midValue(c[k], c[k | 1 << a]));
+                    Probe edge;
+                    edge.a = c[k], edge.b = c[k | 1 << a], edge.edge = true, edge.dx = dx;
+                    f(m, edge);
                 }
     }
 }
@@ -153,27 +184,27 @@ FloatTree::Ptr refineWhereLevel2Misses(const FloatTree& level2, LevelTree& level
                                        const field::FieldEvaluator& evaluate3, float background3,
                                        float tolerance, Context& ctx, LevelFieldStats& s)
 {
+    const double dx = background3 / 3.0; // the level-3 background is three voxels
     std::vector<Coord> flat;
     for (auto v = levels.cbeginValueOn(); v; ++v)
         if (*v == kLevel2) flat.push_back(v.getCoord());
     const MaskTree mask = maskOfCells(flat, ctx, [&](const Coord& c, auto& acc) {
         openvdb::tree::ValueAccessor<const FloatTree> v2(level2);
-        forEachProbe(c, v2, [&](const Coord& p, float) { acc.setValueOn(p); });
+        forEachProbe(c, v2, dx, [&](const Coord& p, const Probe&) { acc.setValueOn(p); });
     });
     auto probes = std::make_shared<FloatTree>(mask, background3, openvdb::TopologyCopy());
     evaluate3(*probes);
     s.probes = probes->activeVoxelCount();
     std::vector<char> refine(flat.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, flat.size(), 64),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          ctx.checkpoint();
-                          openvdb::tree::ValueAccessor<const FloatTree> v2(level2), pr(*probes);
-                          for (size_t i = r.begin(); i != r.end(); ++i)
-                              forEachProbe(flat[i], v2, [&](const Coord& p, float interpolated) {
-                                  if (std::abs(pr.getValue(p) - interpolated) > tolerance)
-                                      refine[i] = 1;
-                              });
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, flat.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+            ctx.checkpoint();
+            openvdb::tree::ValueAccessor<const FloatTree> v2(level2), pr(*probes);
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                forEachProbe(flat[i], v2, dx, [&](const Coord& p, const Probe& probe) {
+                    if (probe.displacement(pr.getValue(p)) > tolerance) refine[i] = 1;
+                });
+        });
     for (size_t i = 0; i < flat.size(); ++i)
         if (refine[i]) levels.setValueOn(flat[i], kLevel3), ++s.refinedCells;
     return probes;
