@@ -348,6 +348,44 @@ TEST(AdaptiveReconstruct, TheVdbMeshesToTheSameMeshForAnyThreadCount)
     EXPECT_TRUE(io::readLevelSetFile(dir.path("a.vdb"), "surface_fine").adaptive.empty());
 }
 
+TEST(AdaptiveGridFile, ALevelsGridWithoutFittingLevelsIsOneClearError)
+{
+    auto levels = openvdb::Int32Grid::create(0);
+    levels->setName(AdaptiveGrid::kLevelsName);
+    levels->setTransform(openvdb::math::Transform::createLinearTransform(0.04));
+    auto level2 = openvdb::FloatGrid::create(0.06f), level3 = openvdb::FloatGrid::create(0.03f);
+    level2->setName(AdaptiveGrid::kLevel2Name), level3->setName(AdaptiveGrid::kLevel3Name);
+    level2->setTransform(openvdb::math::Transform::createLinearTransform(0.02));
+    level3->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    auto message = [](const openvdb::GridPtrVec& grids) {
+        try {
+            AdaptiveGrid::fromGrids(grids, "f.vdb");
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_TRUE(AdaptiveGrid::fromGrids({level2}, "f.vdb").empty()); // an ordinary level set
+    EXPECT_FALSE(AdaptiveGrid::fromGrids({levels, level2, level3}, "f.vdb").empty());
+    EXPECT_NE(message({levels, level2}).find("without float grids 'surface' and 'surface_fine'"),
+              std::string::npos)
+        << message({levels, level2});
+    level3->setTransform(openvdb::math::Transform::createLinearTransform(0.015));
+    EXPECT_NE(message({levels, level2, level3}).find("voxel sizes are not 4:2:1"),
+              std::string::npos)
+        << message({levels, level2, level3});
+    // through the reader: the same message, naming the file
+    level3->setTransform(openvdb::math::Transform::createLinearTransform(0.01));
+    test::TempDir dir;
+    io::writeLevelSet({levels, level2}, dir.path("broken.vdb"));
+    try {
+        io::readLevelSetFile(dir.path("broken.vdb"));
+        ADD_FAILURE() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(dir.path("broken.vdb")), std::string::npos);
+    }
+}
+
 TEST(AdaptiveReconstruct, RefusesTheBaselineMethodsAndABadThreshold)
 {
     Params p = Params::fromRadius(0.025);
