@@ -124,7 +124,7 @@ void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
     cmd->add_option("--level-tolerance", f.levelTolerance,
                     "with --adaptive: a flat cell is refined too where its surface would move by "
                     "more than this many voxels at the finer level (0: curvature alone, as in "
-                    "the thesis; 0.25 gives fewer triangles, up to ~0.55 r from the uniform mesh)")
+                    "the thesis; larger: fewer triangles, farther from the uniform mesh)")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
 }

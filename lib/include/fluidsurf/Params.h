@@ -57,10 +57,10 @@ struct Params
     double curvatureThreshold = 3.0;
     /// Also refined: a flat cell whose surface would move by more than this many finest voxels
     /// if the field, probed at the finest level where the cell's surface is, replaced what the
-    /// level-2 grid interpolates there. 0: curvature alone decides, as in the thesis. 0.15
-    /// keeps every real frame within 0.5 r of the uniform mesh; 0.25 takes the generated 1M
-    /// drop to 41% of the uniform triangles (0.27 r), the real frames up to 0.53 r.
-    double levelTolerance = 0.15;
+    /// level-2 grid interpolates there. 0: curvature alone decides, as in the thesis. 0.2 keeps
+    /// every real frame within 0.5 r of the uniform mesh and takes the generated 1M drop to 45%
+    /// of its triangles; 0.25 to 41%, with the real frames up to 0.5 r.
+    double levelTolerance = 0.2;
     /// Also refined: cells near a particle with fewer neighbours within h than this - one-layer
     /// sheets, jets and droplets (8-12 neighbours in a flat layer, 32 inside the fluid), which
     /// the coarser level can lose whole. The thesis refines near splash particles

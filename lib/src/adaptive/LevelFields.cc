@@ -136,7 +136,8 @@ struct Probe
 };
 
 /// Level-3 probes of a level-2 cell where its surface is: the centre of each of its level-2
-/// cells with a sign change and the middle of each level-2 edge with one. f(point, Probe).
+/// cells with a sign change, and the middle of each level-2 edge and the centre of each face
+/// with one. f(point, Probe).
 /// (Probing near the surface as well, where a corner is within two voxels of it, refined nearly
 /// every cell of the generated drop for little gain.)
 template <typename F>
@@ -166,6 +167,21 @@ void forEachProbe(const Coord& cell, openvdb::tree::ValueAccessor<const FloatTre
         centre.gradient = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]) / dx;
         const Coord p(2 * sub.x(), 2 * sub.y(), 2 * sub.z());
         f(p + Coord(1, 1, 1), centre);
+        // Face centres of faces with a sign change: a bump between the level-2 lines that
+        // neither the edges nor the cell centres see (the flat bottom of a dam break).
+        for (int axis = 0; axis < 3; ++axis)
+            for (int side = 0; side < 2; ++side) {
+                float v[4];
+                int n = 0, in = 0;
+                for (int k = 0; k < 8; ++k)
+                    if ((k >> axis & 1) == side) v[n] = c[k], in += c[k] < 0, ++n;
+                if (in == 0 || in == 4) continue;
+                Probe face = centre;
+                face.interpolated = 0.25f * ((v[0] + v[3]) + (v[1] + v[2]));
+                Coord q = p + Coord(1, 1, 1);
+                q[axis] += side ? 1 : -1;
+                f(q, face);
+            }
         for (int k = 0; k < 8; ++k)
             for (int a = 0; a < 3; ++a)
                 if (!(k >> a & 1) && (c[k] < 0) != (c[k | 1 << a] < 0)) {

@@ -38,7 +38,8 @@ struct LevelFieldStats
 /// Fills level2 (grows) and returns the level-3 tree (background background3); levels grows by
 /// the completion's cells. With tolerance > 0 (world units), a level-2 cell is first probed at
 /// level 3 where its surface is (the middle of every level-2 edge and the centre of every
-/// level-2 cell with a sign change) and moves to level 3 where its surface would move by more
+/// level-2 cell with a sign change, and the centre of each of its faces with one) and moves to
+/// level 3 where its surface would move by more
 /// than tolerance: on an edge, the crossing's own move from the level-2 edge to the level-3
 /// half-edge; at a centre, phi's change over its gradient. The probes' values are kept for the
 /// cells that end up at level 3.
