@@ -21,19 +21,6 @@ namespace bench {
 
 namespace {
 
-/// Resident memory of this process now, MiB (VmRSS).
-double rssMiB()
-{
-    FILE* f = std::fopen("/proc/self/status", "r");
-    if (!f) return 0;
-    char line[256];
-    double kb = 0;
-    while (std::fgets(line, sizeof(line), f))
-        if (std::sscanf(line, "VmRSS: %lf kB", &kb) == 1) break;
-    std::fclose(f);
-    return kb / 1024.0;
-}
-
 struct Method
 {
     const char* name;
@@ -75,7 +62,7 @@ int runAdaptiveBench(const AdaptiveBenchOptions& o)
                 m.last = ReconstructResult(); // the previous run's result is not held
                 malloc_trim(0);               // and its memory is given back first
                 resetPeakRss();
-                const double base = rssMiB();
+                const double base = statusMiB("VmRSS"); // resident now
                 Context ctx;
                 m.seconds.push_back(seconds([&] { m.last = reconstruct(c.particles, p, ctx); }));
                 m.peak.push_back(peakRssMiB() - base);

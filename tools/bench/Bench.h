@@ -102,17 +102,24 @@ template <typename F> double seconds(F&& f)
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// Peak resident set size of this process so far, in MiB (VmHWM).
-inline double peakRssMiB()
+/// A memory line of /proc/self/status ("VmHWM", "VmRSS"), in MiB.
+inline double statusMiB(const std::string& field)
 {
     FILE* f = std::fopen("/proc/self/status", "r");
     if (!f) return 0;
+    const std::string format = field + ": %lf kB";
     char line[256];
     double kb = 0;
     while (std::fgets(line, sizeof(line), f))
-        if (std::sscanf(line, "VmHWM: %lf kB", &kb) == 1) break;
+        if (std::sscanf(line, format.c_str(), &kb) == 1) break;
     std::fclose(f);
     return kb / 1024.0;
+}
+
+/// Peak resident set size of this process so far, in MiB (VmHWM).
+inline double peakRssMiB()
+{
+    return statusMiB("VmHWM");
 }
 
 } // namespace bench

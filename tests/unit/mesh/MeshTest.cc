@@ -60,15 +60,19 @@ TEST(MeshCheck, ThinTrianglesAreCountedByTheirSmallestAngle)
     EXPECT_NE(describe(r).find("2 under 10 deg"), std::string::npos) << describe(r);
 }
 
-TEST(MeshDistance, ExactToTheNearestTriangle)
+/// A unit square in z = 0 (two triangles), and one triangle 0.5 above it, reaching past its edge.
+void squareAndTriangleAbove(TriangleMesh& square, TriangleMesh& above)
 {
-    // a unit square in z = 0 (two triangles), and one triangle above it
-    TriangleMesh square;
     square.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
     square.triangles = {{0, 1, 2}, {0, 2, 3}};
-    TriangleMesh above;
     above.points = {{0.25f, 0.25f, 0.5f}, {0.75f, 0.25f, 0.5f}, {0.5f, 2.f, 0.5f}};
     above.triangles = {{0, 1, 2}};
+}
+
+TEST(MeshDistance, ExactToTheNearestTriangle)
+{
+    TriangleMesh square, above;
+    squareAndTriangleAbove(square, above);
     // from above: its corners; (0.5, 2, 0.5) is 1 beside the square's edge and 0.5 over it
     EXPECT_NEAR(meshDistance(above, square, 2.0), std::sqrt(1.0 + 0.25), 1e-6);
     // from the square: its corner (0, 1, 0) is nearest the edge from (0.25, 0.25, 0.5) to
@@ -90,13 +94,9 @@ TEST(MeshDistance, ExactToTheNearestTriangle)
 
 TEST(MeshDistance, MeanOverVerticesAndCentroids)
 {
-    // the unit square, and a triangle above it: its three corners and its centroid sample it
-    TriangleMesh square;
-    square.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
-    square.triangles = {{0, 1, 2}, {0, 2, 3}};
-    TriangleMesh above;
-    above.points = {{0.25f, 0.25f, 0.5f}, {0.75f, 0.25f, 0.5f}, {0.5f, 2.f, 0.5f}};
-    above.triangles = {{0, 1, 2}};
+    // the triangle's three corners and its centroid sample it
+    TriangleMesh square, above;
+    squareAndTriangleAbove(square, above);
     // two corners and the centroid (0.5, 0.833, 0.5) lie over the square (0.5 away), the third
     // 1 beside it: sqrt(1.25)
     EXPECT_NEAR(meanMeshDistance(above, square, 2.0), (3 * 0.5 + std::sqrt(1.25)) / 4, 1e-6);
