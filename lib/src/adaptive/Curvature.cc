@@ -1,7 +1,9 @@
-// Curvature.cc - color-field normals of the surface particles, then kappa from them.
+// Curvature.cc - kappa of the surface particles from their color-field normals.
 #include "adaptive/Curvature.h"
 
 #include "util/Vec3d.h"
+
+#include <fluidsurf/Error.h>
 
 #include <tbb/parallel_for.h>
 
@@ -39,24 +41,9 @@ std::vector<float> particleCurvature(const neighbors::CellIndex& index,
     const size_t n = index.size();
     const double h = params.smoothingLength;
     const auto& cls = classes.classes;
-    std::vector<Vec3d> normal(n, Vec3d(0, 0, 0));
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
-            ctx.checkpoint();
-            for (size_t i = r.begin(); i != r.end(); ++i) {
-                if (!classify::isSurface(cls[i])) continue;
-                Vec3d g(0, 0, 0);
-                forEachNeighbour(
-                    index, i, h, [&](uint32_t j, double d2, double dx, double dy, double dz) {
-                        const double v =
-                            index.radii.empty() ? 1.0 : std::pow(double(index.radii[j]), 3);
-                        const double t = h * h - d2, w = v * t * t;
-                        g += Vec3d(w * dx, w * dy, w * dz);
-                    });
-                const double len = g.length();
-                if (len > 0) normal[i] = g / len;
-            }
-        });
+    if (classes.normals.size() != n)
+        throw Error("particleCurvature: the classification has no normals");
+    const std::vector<Vec3f>& normal = classes.normals;
     std::vector<float> kappa(n, 0.f);
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& r) {
@@ -66,7 +53,7 @@ std::vector<float> particleCurvature(const neighbors::CellIndex& index,
                 double k = 0;
                 forEachNeighbour(index, i, h, [&](uint32_t j, double d2, double, double, double) {
                     if (!classify::isSurface(cls[j])) return;
-                    k += (1 - normal[i].dot(normal[j])) * (1 - std::sqrt(d2) / h);
+                    k += (1 - toVec3d(normal[i]).dot(toVec3d(normal[j]))) * (1 - std::sqrt(d2) / h);
                 });
                 kappa[i] = float(k);
             }

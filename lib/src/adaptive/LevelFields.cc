@@ -83,11 +83,21 @@ float fromLevel2(const Coord& p, openvdb::tree::ValueAccessor<const FloatTree>& 
 }
 
 /// Cells not yet meshed that share a sign-changing boundary edge with cell (at its level:
-/// step 1 in the level-3 tree, step 2 in level-2 coordinates times two).
+/// step 1 in the level-3 tree, step 2 in level-2 coordinates times two). The neighbours' levels
+/// are looked up first: most edges touch only meshed cells, and their signs are not read.
 void unmeshedNeighbours(const Coord& cell, int level, LevelLookup& levels,
                         openvdb::tree::ValueAccessor<const FloatTree>& values,
                         std::vector<Coord>& out)
 {
+    bool unmeshed[3][3][3]; // [z][y][x], offsets -1..1 from cell
+    bool any = false;
+    for (int i = 0; i < 27; ++i) {
+        const Coord d(i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1);
+        bool& u = unmeshed[i / 9][i / 3 % 3][i % 3];
+        u = d != Coord(0) && levels.level(cell + d) == 0;
+        any |= u;
+    }
+    if (!any) return;
     const int n = level == kLevel3 ? 4 : 2; // cells per coarse cell along an axis
     const Coord origin = scaled(cell, n);
     for (int a = 0; a < 3; ++a) {
@@ -97,18 +107,25 @@ void unmeshedNeighbours(const Coord& cell, int level, LevelLookup& levels,
                 for (int k = 0; k <= n; ++k) {
                     const bool onB = j == 0 || j == n, onC = k == 0 || k == n;
                     if (!onB && !onC) continue; // inside the cell
+                    // The other cells around this edge, and whether any is unmeshed.
+                    Coord others[3];
+                    int count = 0;
+                    for (int db = onB ? -1 : 0; db <= 0; ++db)
+                        for (int dc = onC ? -1 : 0; dc <= 0; ++dc) {
+                            if (db == 0 && dc == 0) continue;
+                            Coord d(0);
+                            d[b] = j == 0 ? db : -db;
+                            d[c] = k == 0 ? dc : -dc;
+                            if (unmeshed[d.z() + 1][d.y() + 1][d.x() + 1])
+                                others[count++] = cell + d;
+                        }
+                    if (count == 0) continue;
                     Coord p = origin;
                     p[a] += i, p[b] += j, p[c] += k;
                     Coord q = p;
                     q[a] += 1;
                     if ((values.getValue(p) < 0) == (values.getValue(q) < 0)) continue;
-                    for (int db = onB ? -1 : 0; db <= 0; ++db)
-                        for (int dc = onC ? -1 : 0; dc <= 0; ++dc) {
-                            Coord other = cell;
-                            other[b] += j == 0 ? db : -db;
-                            other[c] += k == 0 ? dc : -dc;
-                            if (other != cell && levels.level(other) == 0) out.push_back(other);
-                        }
+                    out.insert(out.end(), others, others + count);
                 }
     }
 }

@@ -25,6 +25,9 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
 #include <tuple>
 
 namespace fluidsurf {
@@ -76,10 +79,31 @@ struct Split
 
 struct Block
 {
-    std::vector<Key> corners; // 3 per triangle
-    std::vector<VertexRecord> vertices;
+    std::vector<uint32_t> corners;      // 3 per triangle: numbers in vertices
+    std::vector<VertexRecord> vertices; // as the cells find them, then one per key (sorted)
+    std::vector<uint32_t> global;       // the mesh's vertex number of each of vertices
     std::vector<Segment> segments;
     size_t cells[2] = {0, 0}, triangles[2] = {0, 0};
+
+    /// One record per key, sorted by key, the corners renumbered to match: most vertices are
+    /// found by several cells of the block.
+    void mergeVertices()
+    {
+        std::vector<std::pair<Key, uint32_t>> order(vertices.size());
+        for (uint32_t i = 0; i < order.size(); ++i)
+            order[i] = {vertices[i].key, i};
+        std::sort(order.begin(), order.end(),
+                  [](const auto& a, const auto& b) { return a.first < b.first; });
+        std::vector<uint32_t> renumber(vertices.size());
+        std::vector<VertexRecord> unique;
+        for (const auto& [key, i] : order) {
+            if (unique.empty() || !(unique.back().key == key)) unique.push_back(vertices[i]);
+            renumber[i] = uint32_t(unique.size() - 1);
+        }
+        for (uint32_t& c : corners)
+            c = renumber[c];
+        vertices = std::move(unique);
+    }
 };
 
 constexpr size_t kCellsPerBlock = 128;
@@ -112,6 +136,33 @@ struct CellMesher
                 world(p, axis, 2 * mesh::crossing(a, b))};
     }
 
+    /// The values of the (n + 1)^3 lattice points from lo into value[z][y][x], NaN where a point
+    /// is inactive: read from the (at most 8) leaves the points lie in, not point by point.
+    static void gather(FloatAccessor& acc, const Coord& lo, int n, float (&value)[5][5][5])
+    {
+        using Leaf = FloatTree::LeafNodeType;
+        constexpr float kNone = std::numeric_limits<float>::quiet_NaN();
+        const Leaf* leaf[2][2][2];
+        const Coord base(lo.x() & ~7, lo.y() & ~7, lo.z() & ~7);
+        for (int k = 0; k < 8; ++k)
+            leaf[k >> 2][k >> 1 & 1][k & 1] =
+                acc.probeConstLeaf(base.offsetBy((k & 1) * 8, (k >> 1 & 1) * 8, (k >> 2) * 8));
+        for (int z = 0; z <= n; ++z)
+            for (int y = 0; y <= n; ++y)
+                for (int x = 0; x <= n; ++x) {
+                    const Coord p = lo.offsetBy(x, y, z);
+                    const Leaf* l = leaf[(p.z() - base.z()) >> 3][(p.y() - base.y()) >> 3]
+                                        [(p.x() - base.x()) >> 3];
+                    float& v = value[z][y][x];
+                    if (l) {
+                        const openvdb::Index i = Leaf::coordToOffset(p);
+                        v = l->isValueOn(i) ? l->getValue(i) : kNone;
+                    } else if (!acc.probeValue(p, v)) { // a tile, or nothing
+                        v = kNone;
+                    }
+                }
+    }
+
     void cell(const Coord& coarse, int level, adaptive::LevelLookup& levels, FloatAccessor& v2,
               FloatAccessor& v3, uint32_t blockNumber, Block& out) const
     {
@@ -123,6 +174,15 @@ struct CellMesher
             const int other = levels.level(offset(coarse, f / 2, f & 1 ? 1 : -1));
             transition[f] = other != 0 && other != level;
         }
+        // The cell's lattice values (5^3 at level 3, 3^3 at level 2), read once for its 64 or 8
+        // sub-cells; NaN where there is none.
+        float value[5][5][5];
+        if (level == kLevel3)
+            gather(v3, origin, n, value);
+        else
+            gather(v2, Coord(coarse.x() * 2, coarse.y() * 2, coarse.z() * 2), n, value);
+        int32_t slot[3][5][5][5]; // the vertex of each lattice edge: axis, lower point
+        std::fill(&slot[0][0][0][0], &slot[0][0][0][0] + 3 * 125, -1);
         const size_t before = out.corners.size();
         for (int s = 0; s < n * n * n; ++s) {
             const int si[3] = {s % n, s / n % n, s / (n * n)};
@@ -131,12 +191,9 @@ struct CellMesher
             float c[8];
             bool complete = true;
             for (int k = 0; k < 8 && complete; ++k) {
-                const Coord p(sub.x() + step * mesh::kCorner[k][0],
-                              sub.y() + step * mesh::kCorner[k][1],
-                              sub.z() + step * mesh::kCorner[k][2]);
-                complete = level == kLevel3
-                               ? v3.probeValue(p, c[k])
-                               : v2.probeValue(Coord(p.x() >> 1, p.y() >> 1, p.z() >> 1), c[k]);
+                c[k] = value[si[2] + mesh::kCorner[k][2]][si[1] + mesh::kCorner[k][1]]
+                            [si[0] + mesh::kCorner[k][0]];
+                complete = !std::isnan(c[k]);
             }
             if (!complete) continue;
             int config = 0;
@@ -144,36 +201,44 @@ struct CellMesher
                 config |= int(mesh::inside(c[k])) << k;
             if (config == 0 || config == 255) continue;
             const mesh::CellPolygons polygons(c);
-            VertexRecord vertex[12];
+            uint32_t vertex[12]; // numbers in out.vertices
             for (int e = 0; e < 12; ++e) {
                 if (polygons.next[e] < 0) continue;
                 const int low = mesh::kEdges.lowCorner[e], axis = mesh::kEdges.axis[e];
                 const Coord p(sub.x() + step * mesh::kCorner[low][0],
                               sub.y() + step * mesh::kCorner[low][1],
                               sub.z() + step * mesh::kCorner[low][2]);
+                // The sub-cells share their edges: each edge's vertex is made once per cell.
+                int32_t& known = slot[axis][si[2] + mesh::kCorner[low][2]]
+                                     [si[1] + mesh::kCorner[low][1]][si[0] + mesh::kCorner[low][0]];
+                if (known >= 0) {
+                    vertex[e] = uint32_t(known);
+                    continue;
+                }
                 const float a = c[low], b = c[low | 1 << axis];
-                vertex[e] = level == kLevel2 ? level2Vertex(p, axis, a, b)
-                                             : level3Vertex(p, axis, a, b, levels, v2);
-                out.vertices.push_back(vertex[e]);
+                vertex[e] = uint32_t(out.vertices.size());
+                known = int32_t(vertex[e]);
+                out.vertices.push_back(level == kLevel2 ? level2Vertex(p, axis, a, b)
+                                                        : level3Vertex(p, axis, a, b, levels, v2));
             }
+            auto key = [&](int e) { return out.vertices[vertex[e]].key; };
             int number = 0;
             polygons.forEach([&](const int* edges, int count) {
                 const uint32_t first = uint32_t(out.corners.size() / 3);
                 const bool fan = !polygons.ambiguous || count == 3;
                 if (fan) {
                     for (int k = 1; k + 1 < count; ++k)
-                        out.corners.insert(
-                            out.corners.end(),
-                            {vertex[edges[0]].key, vertex[edges[k]].key, vertex[edges[k + 1]].key});
+                        out.corners.insert(out.corners.end(), {vertex[edges[0]], vertex[edges[k]],
+                                                               vertex[edges[k + 1]]});
                 } else {
                     Vec3d centre(0.0); // summed as the uniform mesher sums it
                     for (int k = 0; k < count; ++k)
-                        centre += toVec3d(vertex[edges[k]].point) / count;
-                    const VertexRecord mid{keyOf(sub, 3 + number), toVec3f(centre)};
-                    out.vertices.push_back(mid);
+                        centre += toVec3d(out.vertices[vertex[edges[k]]].point) / count;
+                    const uint32_t mid = uint32_t(out.vertices.size());
+                    out.vertices.push_back({keyOf(sub, 3 + number), toVec3f(centre)});
                     for (int k = 0; k < count; ++k)
-                        out.corners.insert(out.corners.end(), {mid.key, vertex[edges[k]].key,
-                                                               vertex[edges[(k + 1) % count]].key});
+                        out.corners.insert(out.corners.end(),
+                                           {mid, vertex[edges[k]], vertex[edges[(k + 1) % count]]});
                 }
                 ++number;
                 // Edges on a face between levels, for the cracks.
@@ -186,9 +251,8 @@ struct CellMesher
                     // triangle k - 1 (edge 0 -> 1 in 0, the last edge in count - 3); centre fans
                     // in triangle k.
                     const int t = !fan ? k : k == 0 ? 0 : k == count - 1 ? count - 3 : k - 1;
-                    out.segments.push_back({keyOf(square, axis), vertex[e].key,
-                                            vertex[polygons.next[e]].key, blockNumber,
-                                            first + uint32_t(t), level == kLevel2});
+                    out.segments.push_back({keyOf(square, axis), key(e), key(polygons.next[e]),
+                                            blockNumber, first + uint32_t(t), level == kLevel2});
                 }
             });
         }
@@ -286,6 +350,8 @@ TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMe
     // everything does not depend on the threads.
     std::vector<Block> blocks((cells.size() + kCellsPerBlock - 1) / kCellsPerBlock);
     const CellMesher mesher{grid, dx};
+    std::optional<TimingTree::Scope> step; // the sub-stages, for -v
+    step.emplace(ctx.timing(), "cells");
     tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
         ctx.checkpoint();
         adaptive::LevelLookup levels(grid.levels->tree());
@@ -293,37 +359,45 @@ TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMe
         const size_t end = std::min(cells.size(), (b + 1) * kCellsPerBlock);
         for (size_t i = b * kCellsPerBlock; i < end; ++i)
             mesher.cell(cells[i].first, cells[i].second, levels, v2, v3, uint32_t(b), blocks[b]);
-        // Most vertices are found by several cells of the block: one record each before the
-        // global sort.
-        auto& v = blocks[b].vertices;
-        std::sort(v.begin(), v.end(),
-                  [](const VertexRecord& x, const VertexRecord& y) { return x.key < y.key; });
-        v.erase(std::unique(
-                    v.begin(), v.end(),
-                    [](const VertexRecord& x, const VertexRecord& y) { return x.key == y.key; }),
-                v.end());
+        blocks[b].mergeVertices();
     });
 
+    step.emplace(ctx.timing(), "vertices and cracks");
     AdaptiveMeshStats s;
-    std::vector<VertexRecord> vertices;
     std::vector<Segment> segments;
-    size_t cornerCount = 0;
+    size_t cornerCount = 0, records = 0;
     for (const Block& b : blocks) {
-        vertices.insert(vertices.end(), b.vertices.begin(), b.vertices.end());
         segments.insert(segments.end(), b.segments.begin(), b.segments.end());
-        cornerCount += b.corners.size();
+        cornerCount += b.corners.size(), records += b.vertices.size();
         s.level2Cells += b.cells[0], s.level3Cells += b.cells[1];
         s.level2Triangles += b.triangles[0], s.level3Triangles += b.triangles[1];
     }
-    // One vertex per key (every record of a key carries the same point).
-    tbb::parallel_sort(vertices.begin(), vertices.end(),
-                       [](const VertexRecord& a, const VertexRecord& b) { return a.key < b.key; });
-    vertices.erase(
-        std::unique(vertices.begin(), vertices.end(),
-                    [](const VertexRecord& a, const VertexRecord& b) { return a.key == b.key; }),
-        vertices.end());
+    // One vertex per key (every record of a key carries the same point), numbered in key order;
+    // each block learns the numbers of its own records.
+    struct Tagged
+    {
+        const VertexRecord* record;
+        uint32_t block, number;
+    };
+    std::vector<Tagged> tagged;
+    tagged.reserve(records);
+    for (size_t b = 0; b < blocks.size(); ++b) {
+        blocks[b].global.resize(blocks[b].vertices.size());
+        for (size_t i = 0; i < blocks[b].vertices.size(); ++i)
+            tagged.push_back({&blocks[b].vertices[i], uint32_t(b), uint32_t(i)});
+    }
+    tbb::parallel_sort(tagged.begin(), tagged.end(), [](const Tagged& a, const Tagged& b) {
+        return a.record->key < b.record->key;
+    });
+    std::vector<VertexRecord> vertices;
+    for (const Tagged& t : tagged) {
+        if (vertices.empty() || !(vertices.back().key == t.record->key))
+            vertices.push_back(*t.record);
+        blocks[t.block].global[t.number] = uint32_t(vertices.size() - 1);
+    }
     if (vertices.size() >= (size_t(1) << 32))
         throw ValueError("the adaptive grid has more than 2^32 surface vertices");
+    // The crack vertices, by key.
     auto indexOf = [&](const Key& k) {
         return uint32_t(
             std::lower_bound(vertices.begin(), vertices.end(), k,
@@ -348,6 +422,7 @@ TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMe
                                segments.begin() + squareStart[q + 1], patches[q], splits[q]);
     });
 
+    step.emplace(ctx.timing(), "triangles");
     TriangleMesh mesh;
     mesh.points.resize(vertices.size());
     for (size_t i = 0; i < vertices.size(); ++i)
@@ -358,10 +433,10 @@ TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMe
         first[b + 1] = first[b] + blocks[b].corners.size() / 3;
     {
         tbb::parallel_for(size_t(0), blocks.size(), [&](size_t b) {
-            const std::vector<Key>& k = blocks[b].corners;
+            const std::vector<uint32_t>& k = blocks[b].corners;
+            const std::vector<uint32_t>& g = blocks[b].global;
             for (size_t t = 0; t < k.size() / 3; ++t)
-                mesh.triangles[first[b] + t] = {indexOf(k[3 * t]), indexOf(k[3 * t + 1]),
-                                                indexOf(k[3 * t + 2])};
+                mesh.triangles[first[b] + t] = {g[k[3 * t]], g[k[3 * t + 1]], g[k[3 * t + 2]]};
         });
     }
     // Splits: a triangle cut by cracks is fanned from the corner opposite each cut edge through
@@ -414,6 +489,7 @@ TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMe
             mesh.triangles.push_back({indexOf(t[0]), indexOf(t[1]), indexOf(t[2])});
     }
     s.patchTriangles = mesh.triangles.size() - before;
+    step.emplace(ctx.timing(), "normals");
     post::computeAngleWeightedNormals(mesh);
     if (stats) *stats = s;
     return mesh;

@@ -10,7 +10,8 @@
 namespace fluidsurf {
 namespace backend {
 
-Classified classifyOnCpu(const Particles& particles, const Params& params, Context& ctx, Band& out)
+Classified classifyOnCpu(const Particles& particles, const Params& params, Context& ctx, Band& out,
+                         bool withNormals)
 {
     Classified c;
     {
@@ -21,7 +22,7 @@ Classified classifyOnCpu(const Particles& particles, const Params& params, Conte
             particles.positions.size(), cellSize, ctx);
     }
     const auto t = ctx.scope("classify");
-    c.classes = classify::classifyParticles(c.index, params, ctx);
+    c.classes = classify::classifyParticles(c.index, params, ctx, withNormals);
     out.interior = c.classes.interior, out.surface = c.classes.surface;
     out.splash = c.classes.splash, out.isolated = c.classes.isolated;
     out.isolatedParticles.clear();

@@ -18,7 +18,8 @@ struct Classified
 
 /// "neighbors" and "classify" (timed in ctx); class counts and the isolated particles (input
 /// indices, ascending, unless kept) go into out.
-Classified classifyOnCpu(const Particles& particles, const Params& params, Context& ctx, Band& out);
+Classified classifyOnCpu(const Particles& particles, const Params& params, Context& ctx, Band& out,
+                         bool withNormals = false);
 
 /// The index without its isolated particles (they take no part in the field), unless kept.
 neighbors::CellIndex fieldParticles(Classified&& c, const Params& params);

@@ -60,7 +60,7 @@ ClassRule classRule(const Params& params)
 }
 
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
-                                 Context& ctx)
+                                 Context& ctx, bool withNormals)
 {
     const size_t n = index.size();
     Classification out;
@@ -68,6 +68,7 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     out.neighbours.assign(n, 0);
     out.colorField.assign(n, 0.f);
     out.colorGradient.assign(n, 0.f);
+    if (withNormals) out.normals.assign(n, Vec3f(0, 0, 0));
     const KernelConstants k = kernelConstants(params);
     const ClassRule rule = classRule(params);
     const double h = k.h, uniformVolume = k.uniformVolume;
@@ -118,6 +119,7 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
                         out.colorField[i] = out.colorField[computed];
                         out.colorGradient[i] = out.colorGradient[computed];
                         out.classes[i] = out.classes[computed];
+                        if (withNormals) out.normals[i] = out.normals[computed];
                         continue;
                     }
                     computed = i;
@@ -141,6 +143,16 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
                     out.colorField[i] = ps.colorField;
                     out.colorGradient[i] = ps.gradient;
                     out.classes[i] = ps.cls;
+                    if (withNormals && isSurface(ps.cls)) {
+                        // The gradient's sum points into the fluid (d = x_j - x_i).
+                        double g[3] = {0, 0, 0};
+                        for (int l = 0; l < kLanes; ++l)
+                            g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
+                        const double len = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+                        if (len > 0)
+                            out.normals[i] =
+                                Vec3f(float(-g[0] / len), float(-g[1] / len), float(-g[2] / len));
+                    }
                 }
             }
         });

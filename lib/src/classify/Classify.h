@@ -39,6 +39,9 @@ struct Classification
     std::vector<uint32_t> neighbours; ///< other particles closer than h
     std::vector<float> colorField;    ///< cf_i as above
     std::vector<float> colorGradient; ///< |grad cf_i| * h (MCG03's surface normal length)
+    /// -grad cf_i / |grad cf_i| (outward; 0 where the gradient vanishes), for the surface and
+    /// splash particles only, and only when asked for (the curvature of ch. 6); else empty
+    std::vector<Vec3f> normals;
     size_t interior = 0, surface = 0, splash = 0, isolated = 0; ///< surface excludes splash
 };
 
@@ -59,9 +62,9 @@ ClassRule classRule(const Params& params);
 
 /// Parallel over occupied cells (ctx.checkpoint() per range); each cell gathers its
 /// neighbourhood once.
-/// uniformRadius is used when the index has no per-particle radii.
+/// uniformRadius is used when the index has no per-particle radii. withNormals fills normals.
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
-                                 Context& ctx);
+                                 Context& ctx, bool withNormals = false);
 
 } // namespace classify
 } // namespace fluidsurf

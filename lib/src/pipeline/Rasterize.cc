@@ -104,7 +104,7 @@ struct Run
     {
         RasterizeStats& stats = result.stats;
         backend::Band band;
-        backend::Classified c = backend::classifyOnCpu(particles, params, ctx, band);
+        backend::Classified c = backend::classifyOnCpu(particles, params, ctx, band, true);
         take(band);
         std::vector<float> kappa;
         {
