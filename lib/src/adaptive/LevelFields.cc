@@ -289,13 +289,13 @@ openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels
         });
         want3.topologyDifference(*level3);
         FloatTree evaluated(want3, background3, openvdb::TopologyCopy());
-        FloatTree taken(want3, background3, openvdb::TopologyCopy());
         forEachVoxel(
             evaluated, ctx, [&] { return LevelLookup(levels); },
             [](auto& v, LevelLookup& lookup) {
                 const Coord p = v.getCoord();
                 if (!((p.x() | p.y() | p.z()) & 1) || lookup.subsampled(p)) v.setValueOff();
             });
+        MaskTree taken(want3);
         taken.topologyDifference(evaluated);
         FloatTree reused(*probes); // probes of cells now at level 3: evaluated already
         reused.topologyIntersection(evaluated);
@@ -303,29 +303,29 @@ openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels
         evaluate3(evaluated);
         s.level3Evaluated += evaluated.activeVoxelCount();
         evaluated.merge(reused);
-        {
-            const FloatTree& from = level2;
-            forEachVoxel(
-                taken, ctx, [&] { return openvdb::tree::ValueAccessor<const FloatTree>(from); },
-                [&](auto& v, auto& acc) {
-                    v.setValue(fromLevel2(v.getCoord(), acc, background3));
-                });
-        }
+        probes = std::make_shared<FloatTree>(background3); // refinement is done: none are left
+        level3->merge(evaluated);
+        // The copies and sub-samples, written into level 3's own leaves (no tree of their own).
+        level3->topologyUnion(taken);
         std::atomic<size_t> copies{0};
         {
-            openvdb::tree::LeafManager<FloatTree> leaves(taken);
-            leaves.foreach ([&](const FloatTree::LeafNodeType& leaf, size_t) {
+            const FloatTree& from = level2;
+            openvdb::tree::LeafManager<FloatTree> leaves(*level3);
+            leaves.foreach ([&](FloatTree::LeafNodeType& leaf, size_t) {
+                ctx.checkpoint();
+                const MaskTree::LeafNodeType* mask = taken.probeConstLeaf(leaf.origin());
+                if (!mask) return;
+                openvdb::tree::ValueAccessor<const FloatTree> acc(from);
                 size_t n = 0;
-                for (auto v = leaf.cbeginValueOn(); v; ++v) {
+                for (auto v = mask->cbeginValueOn(); v; ++v) {
                     const Coord p = v.getCoord();
+                    leaf.setValueOnly(v.pos(), fromLevel2(p, acc, background3));
                     n += !((p.x() | p.y() | p.z()) & 1);
                 }
                 copies += n;
             });
         }
         s.subsampled += taken.activeVoxelCount() - copies;
-        level3->merge(evaluated);
-        level3->merge(taken);
 
         // Completion: unmeshed cells across sign-changing boundary edges, added at level 3.
         std::vector<std::vector<Coord>> found(cells.size());

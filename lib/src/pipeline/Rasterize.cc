@@ -150,6 +150,12 @@ struct Run
                  uint32_t(std::max(params.thinNeighbours, params.splashNeighbours))},
                 ctx);
         }
+        // The classes, normals and curvature have done their work: their memory (~30 bytes a
+        // particle, and the full index where the field has its own) is given back before the level
+        // fields, the peak of this path.
+        c.classes = classify::Classification();
+        std::vector<float>().swap(kappa);
+        if (fieldIndex != &c.index) c.index = neighbors::CellIndex(); // the field has its own
         const auto t = ctx.scope("level fields");
         adaptive::LevelFieldStats f;
         openvdb::FloatTree::Ptr level3 = adaptive::fillLevels(
