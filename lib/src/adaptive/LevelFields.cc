@@ -83,50 +83,50 @@ float fromLevel2(const Coord& p, openvdb::tree::ValueAccessor<const FloatTree>& 
 }
 
 /// Cells not yet meshed that share a sign-changing boundary edge with cell (at its level:
-/// step 1 in the level-3 tree, step 2 in level-2 coordinates times two). The neighbours' levels
-/// are looked up first: most edges touch only meshed cells, and their signs are not read.
+/// step 1 in the level-3 tree, step 2 in level-2 coordinates times two). Only the unmeshed
+/// neighbours' shared faces and edges are read: most cells have none.
 void unmeshedNeighbours(const Coord& cell, int level, LevelLookup& levels,
                         openvdb::tree::ValueAccessor<const FloatTree>& values,
                         std::vector<Coord>& out)
 {
-    bool unmeshed[3][3][3]; // [z][y][x], offsets -1..1 from cell
-    bool any = false;
-    for (int i = 0; i < 27; ++i) {
-        const Coord d(i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1);
-        bool& u = unmeshed[i / 9][i / 3 % 3][i % 3];
-        u = d != Coord(0) && levels.level(cell + d) == 0;
-        any |= u;
-    }
-    if (!any) return;
     const int n = level == kLevel3 ? 4 : 2; // cells per coarse cell along an axis
     const Coord origin = scaled(cell, n);
-    for (int a = 0; a < 3; ++a) {
-        const int b = (a + 1) % 3, c = (a + 2) % 3;
-        for (int i = 0; i < n; ++i)
-            for (int j = 0; j <= n; ++j)
-                for (int k = 0; k <= n; ++k) {
-                    const bool onB = j == 0 || j == n, onC = k == 0 || k == n;
-                    if (!onB && !onC) continue; // inside the cell
-                    // The other cells around this edge, and whether any is unmeshed.
-                    Coord others[3];
-                    int count = 0;
-                    for (int db = onB ? -1 : 0; db <= 0; ++db)
-                        for (int dc = onC ? -1 : 0; dc <= 0; ++dc) {
-                            if (db == 0 && dc == 0) continue;
-                            Coord d(0);
-                            d[b] = j == 0 ? db : -db;
-                            d[c] = k == 0 ? dc : -dc;
-                            if (unmeshed[d.z() + 1][d.y() + 1][d.x() + 1])
-                                others[count++] = cell + d;
-                        }
-                    if (count == 0) continue;
-                    Coord p = origin;
-                    p[a] += i, p[b] += j, p[c] += k;
-                    Coord q = p;
-                    q[a] += 1;
-                    if ((values.getValue(p) < 0) == (values.getValue(q) < 0)) continue;
-                    out.insert(out.end(), others, others + count);
-                }
+    auto crosses = [&](Coord p, int axis) { // the lattice edge from origin + p along axis
+        p += origin;
+        Coord q = p;
+        q[axis] += 1;
+        return (values.getValue(p) < 0) != (values.getValue(q) < 0);
+    };
+    for (int i = 0; i < 27; ++i) {
+        const Coord d(i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1);
+        int offAxes = 0, axes[3];
+        for (int a = 0; a < 3; ++a)
+            if (d[a]) axes[offAxes++] = a;
+        if (offAxes == 0 || offAxes == 3 || levels.level(cell + d) != 0) continue;
+        bool found = false;
+        if (offAxes == 1) { // a face: the edges in its plane, along either other axis
+            const int f = axes[0];
+            for (int e = 1; e <= 2 && !found; ++e) {
+                const int a = (f + e) % 3, b = (f + 3 - e) % 3;
+                for (int t = 0; t < n && !found; ++t)
+                    for (int u = 0; u <= n && !found; ++u) {
+                        Coord p(0);
+                        p[f] = d[f] > 0 ? n : 0, p[a] = t, p[b] = u;
+                        found = crosses(p, a);
+                    }
+            }
+        } else { // an edge: the lattice edges along it
+            int a = 0;
+            while (d[a])
+                ++a;
+            for (int t = 0; t < n && !found; ++t) {
+                Coord p(0);
+                p[axes[0]] = d[axes[0]] > 0 ? n : 0, p[axes[1]] = d[axes[1]] > 0 ? n : 0;
+                p[a] = t;
+                found = crosses(p, a);
+            }
+        }
+        if (found) out.push_back(cell + d);
     }
 }
 

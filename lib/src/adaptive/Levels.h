@@ -41,7 +41,11 @@ class LevelLookup
 public:
     explicit LevelLookup(const LevelTree& tree) : mAcc(tree) {}
 
-    int level(const Coord& cell) { return mAcc.isValueOn(cell) ? mAcc.getValue(cell) : 0; }
+    int level(const Coord& cell)
+    {
+        int v = 0;
+        return mAcc.probeValue(cell, v) ? v : 0;
+    }
 
     /// Whether level-3 point p lies on the closed box of a level-2 cell: its value there is
     /// sub-sampled from level 2. Only points with an odd coordinate can be (even points are
