@@ -169,5 +169,14 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     return out;
 }
 
+void selectClasses(Classification& c, const std::vector<uint8_t>& keep)
+{
+    selectInPlace(c.classes, keep);
+    selectInPlace(c.neighbours, keep);
+    selectInPlace(c.colorField, keep);
+    selectInPlace(c.colorGradient, keep);
+    selectInPlace(c.normals, keep);
+}
+
 } // namespace classify
 } // namespace fluidsurf

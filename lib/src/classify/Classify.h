@@ -66,5 +66,20 @@ ClassRule classRule(const Params& params);
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
                                  Context& ctx, bool withNormals = false);
 
+/// The classification of the particles keep marks (index order, as neighbors::selectParticles
+/// keeps them), compacted in place; the class counts stay those of the whole frame.
+void selectClasses(Classification& classes, const std::vector<uint8_t>& keep);
+
+/// v's elements that keep marks, in order, compacted in place (capacity given back).
+template <typename T> void selectInPlace(std::vector<T>& v, const std::vector<uint8_t>& keep)
+{
+    if (v.empty()) return;
+    size_t n = 0;
+    for (size_t i = 0; i < v.size(); ++i)
+        if (keep[i]) v[n++] = v[i];
+    v.resize(n);
+    v.shrink_to_fit();
+}
+
 } // namespace classify
 } // namespace fluidsurf

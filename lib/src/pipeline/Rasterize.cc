@@ -111,18 +111,22 @@ struct Run
             const auto t = ctx.scope("curvature");
             kappa = adaptive::particleCurvature(c.index, c.classes, params, ctx);
         }
-        // The field's particles: the index without its isolated ones (the classes and kappa
-        // stay in the full index's order for the level map).
-        neighbors::CellIndex selected;
-        const neighbors::CellIndex* fieldIndex = &c.index;
+        // Only the classes and neighbour counts go on (to the band and the level map).
+        std::vector<Vec3f>().swap(c.classes.normals);
+        std::vector<float>().swap(c.classes.colorField);
+        std::vector<float>().swap(c.classes.colorGradient);
+        // The field's particles: the index without its isolated ones, which the band and the
+        // level map pass over too. The classes and kappa follow it, and the full index goes
+        // before the band is built.
         if (c.classes.isolated && !params.keepIsolated) {
             std::vector<uint8_t> keep(c.classes.classes.size());
             for (size_t i = 0; i < keep.size(); ++i)
                 keep[i] = c.classes.classes[i] != classify::Isolated;
-            selected = neighbors::selectParticles(c.index, keep);
-            fieldIndex = &selected;
+            c.index = neighbors::selectParticles(c.index, keep);
+            classify::selectClasses(c.classes, keep);
+            classify::selectInPlace(kappa, keep);
         }
-        b.useParticles(*fieldIndex);
+        b.useParticles(c.index);
         const Level mid{2 * level.voxelSize};
         {
             const auto t = ctx.scope("narrow band");
@@ -151,11 +155,9 @@ struct Run
                 ctx);
         }
         // The classes, normals and curvature have done their work: their memory (~30 bytes a
-        // particle, and the full index where the field has its own) is given back before the level
-        // fields, the peak of this path.
+        // particle) is given back before the level fields, the peak of this path.
         c.classes = classify::Classification();
         std::vector<float>().swap(kappa);
-        if (fieldIndex != &c.index) c.index = neighbors::CellIndex(); // the field has its own
         const auto t = ctx.scope("level fields");
         adaptive::LevelFieldStats f;
         openvdb::FloatTree::Ptr level3 = adaptive::fillLevels(

@@ -6,6 +6,9 @@
 
 #include <fluidsurf/Scenes.h>
 
+#include <cmath>
+#include <cstdint>
+
 using namespace fluidsurf;
 using namespace fluidsurf::test;
 
@@ -69,6 +72,62 @@ TEST(Classify, LatticeBlockOuterLayerIsSurfaceAndNothingElse)
     EXPECT_EQ(outer, 1000u - 8 * 8 * 8);
     EXPECT_EQ(c.surface + c.splash, outer);
     EXPECT_EQ(c.isolated, 0u);
+}
+
+TEST(Classify, NormalsPointOutOfTheBlockAndFollowASelection)
+{
+    SceneParams sp;
+    sp.count = 10 * 10 * 10;
+    const ParticleSet ps = generateScene(Scene::Block, sp);
+    const Params p = Params::fromRadius(sp.radius);
+    Context ctx;
+    const neighbors::CellIndex index =
+        neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength, ctx);
+    const classify::Classification c = classify::classifyParticles(index, p, ctx, true);
+    ASSERT_EQ(c.normals.size(), index.size());
+    size_t faceCentres = 0;
+    for (size_t i = 0; i < index.size(); ++i) {
+        const Vec3f q = index.positions[i], n = c.normals[i];
+        if (!classify::isSurface(c.classes[i])) {
+            EXPECT_EQ(n, Vec3f(0, 0, 0)) << "interior particles have none";
+            continue;
+        }
+        // a particle on one face, two layers away from its edges: the face's outward normal
+        int cell[3], onFaces = 0, axis = 0;
+        for (int a = 0; a < 3; ++a) {
+            cell[a] = int(std::lround(q[a] / (2 * sp.radius)));
+            if (cell[a] == 0 || cell[a] == 9) ++onFaces, axis = a;
+        }
+        bool central = onFaces == 1;
+        for (int a = 0; a < 3; ++a)
+            central &= a == axis || (cell[a] >= 2 && cell[a] <= 7);
+        if (!central) continue;
+        ++faceCentres;
+        Vec3f out(0, 0, 0);
+        out[axis] = cell[axis] == 0 ? -1.f : 1.f;
+        EXPECT_GT(n.x * out.x + n.y * out.y + n.z * out.z, 0.999f)
+            << q.x << " " << q.y << " " << q.z;
+    }
+    EXPECT_EQ(faceCentres, 6u * 6 * 6);
+
+    // Every third particle dropped: the classes follow the particles selectParticles keeps.
+    std::vector<uint8_t> keep(index.size());
+    for (size_t i = 0; i < keep.size(); ++i)
+        keep[i] = index.order[i] % 3 != 0;
+    const neighbors::CellIndex selected = neighbors::selectParticles(index, keep);
+    classify::Classification s = c;
+    classify::selectClasses(s, keep);
+    std::vector<size_t> at(ps.size(), SIZE_MAX); // input index -> position in index
+    for (size_t i = 0; i < index.size(); ++i)
+        at[index.order[i]] = i;
+    ASSERT_EQ(s.classes.size(), selected.size());
+    ASSERT_EQ(s.normals.size(), selected.size());
+    for (size_t j = 0; j < selected.size(); ++j) {
+        const size_t i = at[selected.order[j]];
+        EXPECT_EQ(s.classes[j], c.classes[i]);
+        EXPECT_EQ(s.neighbours[j], c.neighbours[i]);
+        EXPECT_EQ(s.normals[j], c.normals[i]);
+    }
 }
 
 TEST(Classify, NeighbourCountsMatchBruteForce)
