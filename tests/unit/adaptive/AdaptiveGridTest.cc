@@ -246,8 +246,37 @@ ReconstructParams rawParams(double r, bool adaptive)
     return p;
 }
 
-/// The acceptance on one frame: closed like the uniform mesh, within 0.5 r of it both ways, and
-/// few patch triangles.
+/// The points of mesh inside level-3 regions, as a mesh of points: every coarse cell within one
+/// level-3 voxel of the point is at level 3, so no value its cell was cut from is sub-sampled
+/// from level 2.
+TriangleMesh level3Points(const TriangleMesh& mesh, const AdaptiveGrid& grid)
+{
+    const double cell = grid.levels->voxelSize()[0];
+    openvdb::Int32Grid::ConstAccessor acc = grid.levels->getConstAccessor();
+    TriangleMesh out;
+    for (const Vec3f& p : mesh.points) {
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+            const double q = double(p[a]) / cell;
+            lo[a] = int(std::floor(q - 0.25)), hi[a] = int(std::floor(q + 0.25)); // dx: cell / 4
+        }
+        bool all = true;
+        for (int z = lo[2]; z <= hi[2] && all; ++z)
+            for (int y = lo[1]; y <= hi[1] && all; ++y)
+                for (int x = lo[0]; x <= hi[0] && all; ++x) {
+                    int level = 0;
+                    all = acc.probeValue(openvdb::Coord(x, y, z), level) && level == kLevel3;
+                }
+        if (!all) continue;
+        out.triangles.push_back({uint32_t(out.points.size()), uint32_t(out.points.size()),
+                                 uint32_t(out.points.size())});
+        out.points.push_back(p);
+    }
+    return out;
+}
+
+/// The acceptance on one frame: closed like the uniform mesh, within 0.5 r of it both ways and
+/// within 0.1 r inside level-3 regions, and no more triangles.
 void expectCloseToUniform(const ParticleSet& ps, double r, const std::string& name)
 {
     SCOPED_TRACE(name);
@@ -263,6 +292,12 @@ void expectCloseToUniform(const ParticleSet& ps, double r, const std::string& na
     const double d = std::max(meshDistance(adaptive.mesh, uniform.mesh, 4 * r),
                               meshDistance(uniform.mesh, adaptive.mesh, 4 * r));
     EXPECT_LE(d, 0.5 * r) << "Hausdorff " << d / r << " r";
+    // Inside level-3 regions the detail is the uniform mesh's (the issue: within 0.1 r; the same
+    // values give the same points there). The strip one voxel wide along level-2 faces is cut
+    // from sub-sampled values, and may be up to ~0.2 r off.
+    const TriangleMesh fine = level3Points(adaptive.mesh, adaptive.adaptiveGrid);
+    EXPECT_LE(meshDistance(fine, uniform.mesh, 4 * r), 0.1 * r)
+        << fine.points.size() << " of " << adaptive.mesh.points.size() << " points inside level 3";
     EXPECT_LE(adaptive.mesh.triangles.size(), uniform.mesh.triangles.size());
 }
 
