@@ -9,6 +9,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <optional>
 
 namespace fluidsurf {
 namespace cli {
@@ -279,6 +280,36 @@ std::vector<std::pair<std::string, double>> meshCounts(const MeshReport& r)
             {"area", r.area}};
 }
 
+namespace {
+
+/// -v: the adaptive grid's cells and triangles per level and its crack patches, when the counts
+/// hold them (an adaptive reconstruction or the mesh of an adaptive .vdb).
+void printAdaptiveCounts(const std::vector<std::pair<std::string, double>>& counts)
+{
+    auto count = [&](const char* name) -> std::optional<double> {
+        for (const auto& [key, value] : counts)
+            if (key == name) return value;
+        return std::nullopt;
+    };
+    const auto t2 = count("level2_triangles"), t3 = count("level3_triangles"),
+               patches = count("patch_triangles");
+    if (!t2 || !t3 || !patches) return;
+    const auto c2 = count("level2_cells"), c3 = count("level3_cells");
+    const double all = *t2 + *t3 + *patches;
+    std::printf("  adaptive grid: level 2 %.0f cells, %.0f triangles; level 3 %.0f cells",
+                c2 ? *c2 : 0, *t2, c3 ? *c3 : 0);
+    if (const auto refined = count("level3_refined_cells"))
+        std::printf(" (%.0f refined by the level tolerance, %.0f added to complete the surface)",
+                    *refined, count("level3_completion_cells").value_or(0));
+    std::printf(", %.0f triangles; crack patches %.0f triangles (%.2f%%)", *t3, *patches,
+                all > 0 ? 100 * *patches / all : 0.0);
+    if (const auto open = count("open_cracks"); open && *open > 0)
+        std::printf("; %.0f cracks left open", *open);
+    std::printf("\n");
+}
+
+} // namespace
+
 void Report::frame(const std::string& input, const Context& ctx,
                    const std::vector<std::pair<std::string, double>>& counts,
                    const RasterizeStats* field)
@@ -296,6 +327,7 @@ void Report::frame(const std::string& input, const Context& ctx,
             std::printf("\n  field evaluations %zu (%zu of them completing the band)\n",
                         field->fieldEvaluations, field->bandCompletion);
         }
+        printAdaptiveCounts(counts);
         std::printf("  peak memory %.1f MiB\n", peakMemoryMiB());
     }
     if (mOptions.stats.empty()) return;
