@@ -125,7 +125,8 @@ void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
     cmd->add_option("--level-tolerance", f.levelTolerance,
                     "with --adaptive: a flat cell is refined too where its surface would move by "
                     "more than this many voxels at the finer level (0: curvature alone, as in "
-                    "the thesis; larger: fewer triangles, farther from the uniform mesh)")
+                    "the thesis; larger: fewer triangles, farther from the uniform mesh); a flat "
+                    "cell with more finest-level neighbours than flat ones is refined either way")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
 }
@@ -263,6 +264,7 @@ std::vector<std::pair<std::string, double>> fieldCounts(const RasterizeStats& s)
                                      {"level3_cells", double(s.level3Cells)},
                                      {"level3_completion_cells", double(s.completionCells)},
                                      {"level3_refined_cells", double(s.refinedCells)},
+                                     {"level3_island_cells", double(s.islandCells)},
                                      {"subsampled_values", double(s.subsampled)}});
     return counts;
 }
@@ -299,8 +301,11 @@ void printAdaptiveCounts(const std::vector<std::pair<std::string, double>>& coun
     std::printf("  adaptive grid: level 2 %.0f cells, %.0f triangles; level 3 %.0f cells",
                 c2 ? *c2 : 0, *t2, c3 ? *c3 : 0);
     if (const auto refined = count("level3_refined_cells"))
-        std::printf(" (%.0f refined by the level tolerance, %.0f added to complete the surface)",
-                    *refined, count("level3_completion_cells").value_or(0));
+        std::printf(
+            " (%.0f refined by the level tolerance, %.0f level-2 islands closed, %.0f added "
+            "to complete the surface)",
+            *refined, count("level3_island_cells").value_or(0),
+            count("level3_completion_cells").value_or(0));
     std::printf(", %.0f triangles; crack patches %.0f triangles (%.2f%%)", *t3, *patches,
                 all > 0 ? 100 * *patches / all : 0.0);
     if (const auto open = count("open_cracks"); open && *open > 0)

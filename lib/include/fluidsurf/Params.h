@@ -57,10 +57,12 @@ struct Params
     double curvatureThreshold = 3.0;
     /// Also refined: a flat cell whose surface would move by more than this many finest voxels
     /// if the field, probed at the finest level where the cell's surface is, replaced what the
-    /// level-2 grid interpolates there. 0: curvature alone decides, as in the thesis. 0.2 keeps
-    /// every real frame within 0.5 r of the uniform mesh and takes the generated 1M drop to 45%
-    /// of its triangles; 0.25 to 41%, with the real frames up to 0.5 r.
-    double levelTolerance = 0.2;
+    /// level-2 grid interpolates there. 0: curvature alone decides, as in the thesis. 0.3 keeps
+    /// every real frame within 0.33 r of the uniform mesh and takes the generated 1M drop to 38%
+    /// of its triangles; 0.4 keeps them within 0.45 r, 0.5 not within 0.5 r (BENCHMARKS.md).
+    /// Either way, level-2 cells more of whose neighbours are at level 3 than at level 2 are
+    /// refined too (adaptive/LevelMap.h: they would cost more crack triangles than they save).
+    double levelTolerance = 0.3;
     /// Also refined: cells near a particle with fewer neighbours within h than this - one-layer
     /// sheets, jets and droplets (8-12 neighbours in a flat layer, 32 inside the fluid), which
     /// the coarser level can lose whole. The thesis refines near splash particles

@@ -56,6 +56,7 @@ struct RasterizeStats
     /// level-3 completion, level-3 values sub-sampled from level 2 (fluidsurf/AdaptiveGrid.h).
     size_t level2Cells = 0, level3Cells = 0, completionCells = 0, subsampled = 0;
     size_t refinedCells = 0; ///< flat cells refined where level 2 missed (levelTolerance)
+    size_t islandCells = 0;  ///< level-2 cells moved to level 3 as islands among level 3
 };
 
 struct RasterizeResult

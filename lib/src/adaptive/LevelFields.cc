@@ -1,6 +1,7 @@
 // LevelFields.cc - rounds of: masks of the new cells' points, evaluation of what no tree holds
 // yet, copies and sub-samples, then the completion check.
 #include "adaptive/LevelFields.h"
+#include "adaptive/LevelMap.h"
 
 #include <openvdb/tree/LeafManager.h>
 
@@ -248,8 +249,10 @@ FloatTree::Ptr refineWhereLevel2Misses(const FloatTree& level2, LevelTree& level
 openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels,
                                    const field::FieldEvaluator& evaluate2,
                                    const field::FieldEvaluator& evaluate3, float background3,
-                                   float tolerance, Context& ctx, LevelFieldStats* stats)
+                                   const Refinement& refinement, Context& ctx,
+                                   LevelFieldStats* stats)
 {
+    const float tolerance = refinement.tolerance;
     LevelFieldStats s;
     auto probes = std::make_shared<FloatTree>(background3);
     bool firstRound = true;
@@ -274,6 +277,7 @@ openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels
         if (firstRound && tolerance > 0)
             probes =
                 refineWhereLevel2Misses(level2, levels, evaluate3, background3, tolerance, ctx, s);
+        if (firstRound && refinement.closeIslands) s.islandCells = closeLevel2Islands(levels, ctx);
         firstRound = false;
         // Level 3: the 125 points of every new level-3 cell, split into evaluated and taken from
         // level 2.

@@ -33,20 +33,29 @@ struct LevelFieldStats
     size_t completionCells = 0; ///< coarse cells added by completion (level 3)
     size_t probes = 0;          ///< level-3 probes of level-2 cells (tolerance > 0)
     size_t refinedCells = 0;    ///< level-2 cells the probes moved to level 3
+    size_t islandCells = 0;     ///< level-2 cells moved to level 3 as islands (LevelMap.h)
+};
+
+/// Which level-2 cells move to level 3 before level 3 is filled (beyond the level map's own).
+struct Refinement
+{
+    float tolerance = 0;      ///< world units; 0: none by probes
+    bool closeIslands = true; ///< level-2 islands among level 3 join it (LevelMap.h)
 };
 
 /// Fills level2 (grows) and returns the level-3 tree (background background3); levels grows by
-/// the completion's cells. With tolerance > 0 (world units), a level-2 cell is first probed at
-/// level 3 where its surface is (the middle of every level-2 edge and the centre of every
-/// level-2 cell with a sign change, and the centre of each of its faces with one) and moves to
-/// level 3 where its surface would move by more
-/// than tolerance: on an edge, the crossing's own move from the level-2 edge to the level-3
-/// half-edge; at a centre, phi's change over its gradient. The probes' values are kept for the
-/// cells that end up at level 3.
+/// the refinement's and the completion's cells. With a tolerance > 0, a level-2 cell is first
+/// probed at level 3 where its surface is (the middle of every level-2 edge and the centre of
+/// every level-2 cell with a sign change, and the centre of each of its faces with one), and
+/// moves to level 3 where its surface would move by more than the tolerance: on an edge, the
+/// crossing's own move from the level-2 edge to the level-3 half-edge; at a centre, phi's change
+/// over its gradient. The probes' values are kept for the cells that end up at level 3. Then,
+/// with closeIslands, level-2 islands among level 3 join it (closeLevel2Islands, LevelMap.h).
 openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels,
                                    const field::FieldEvaluator& evaluate2,
                                    const field::FieldEvaluator& evaluate3, float background3,
-                                   float tolerance, Context& ctx, LevelFieldStats* stats = nullptr);
+                                   const Refinement& refinement, Context& ctx,
+                                   LevelFieldStats* stats = nullptr);
 
 } // namespace adaptive
 } // namespace fluidsurf

@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace fluidsurf {
@@ -116,6 +117,47 @@ LevelTree::Ptr buildLevelMap(const LevelMapInput& in, Context& ctx)
         }
     });
     return levels;
+}
+
+size_t closeLevel2Islands(LevelTree& levels, Context& ctx)
+{
+    std::vector<Coord> candidates;
+    for (auto v = levels.cbeginValueOn(); v; ++v)
+        if (*v == kLevel2) candidates.push_back(v.getCoord());
+    size_t moved = 0;
+    while (!candidates.empty()) {
+        std::vector<char> island(candidates.size(), 0);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, candidates.size(), 256),
+                          [&](const tbb::blocked_range<size_t>& r) {
+                              ctx.checkpoint();
+                              LevelLookup lookup(levels);
+                              for (size_t i = r.begin(); i != r.end(); ++i) {
+                                  int at[4] = {0, 0, 0, 0}; // by level: 0, 2 and 3 used
+                                  for (int f = 0; f < 6; ++f) {
+                                      Coord q = candidates[i];
+                                      q[f / 2] += f & 1 ? 1 : -1;
+                                      ++at[lookup.level(q)];
+                                  }
+                                  island[i] = at[kLevel3] > at[kLevel2];
+                              }
+                          });
+        // The next round looks only at the level-2 face neighbours of the cells moved now.
+        std::vector<Coord> next;
+        for (size_t i = 0; i < candidates.size(); ++i)
+            if (island[i]) levels.setValueOn(candidates[i], kLevel3), ++moved;
+        LevelLookup lookup(levels);
+        for (size_t i = 0; i < candidates.size(); ++i)
+            if (island[i])
+                for (int f = 0; f < 6; ++f) {
+                    Coord q = candidates[i];
+                    q[f / 2] += f & 1 ? 1 : -1;
+                    if (lookup.level(q) == kLevel2) next.push_back(q);
+                }
+        std::sort(next.begin(), next.end());
+        next.erase(std::unique(next.begin(), next.end()), next.end());
+        candidates = std::move(next);
+    }
+    return moved;
 }
 
 } // namespace adaptive

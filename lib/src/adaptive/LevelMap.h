@@ -9,6 +9,8 @@
 // eq. 6.3) of the surface particles within the band width of the cell decides, level 3 at or
 // above the threshold, level 2 below. A meshed cell with no surface particle that near (the zero
 // crossing of a concave pocket, CompleteBand.h) is level 3: nothing says it is flat.
+// Islands: level-2 cells mostly surrounded by level 3 join it (closeLevel2Islands, run after the
+// level fields' refinement).
 #pragma once
 
 #include "adaptive/Levels.h"
@@ -40,6 +42,15 @@ struct LevelMapInput
 
 /// The coarse cells (voxel 4 dx) with their levels as active values. Parallel, deterministic.
 LevelTree::Ptr buildLevelMap(const LevelMapInput& in, Context& ctx);
+
+/// Moves to level 3 every level-2 cell more of whose meshed face neighbours are at level 3 than
+/// at level 2, in rounds (each round judged on the map before it) until none is left; returns
+/// how many moved. Why: each level-2 square of a face between the levels that the surface
+/// crosses costs at least one crack triangle (a sliver), and a level-2 cell hemmed in by level 3
+/// has such faces on most sides while saving few triangles. Regions of level 2 stay: a cell on a
+/// straight or convex border of one has at most as many level-3 neighbours as level-2 ones; a
+/// strip one cell wide is taken from its ends. Level-3 and unmeshed cells never change.
+size_t closeLevel2Islands(LevelTree& levels, Context& ctx);
 
 } // namespace adaptive
 } // namespace fluidsurf

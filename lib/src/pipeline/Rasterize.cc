@@ -162,9 +162,10 @@ struct Run
         adaptive::LevelFieldStats f;
         openvdb::FloatTree::Ptr level3 = adaptive::fillLevels(
             *level2, *levels, evaluate2, evaluate3, float(params.background(level)),
-            float(params.levelTolerance * level.voxelSize), ctx, &f);
+            adaptive::Refinement{float(params.levelTolerance * level.voxelSize)}, ctx, &f);
         stats.completionCells = f.completionCells, stats.subsampled = f.subsampled;
         stats.refinedCells = f.refinedCells;
+        stats.islandCells = f.islandCells;
         for (auto v = levels->cbeginValueOn(); v; ++v)
             (*v == adaptive::kLevel3 ? stats.level3Cells : stats.level2Cells) += 1;
         return level3;

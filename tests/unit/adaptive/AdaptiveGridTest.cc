@@ -5,6 +5,7 @@
 // close to the uniform mesh of the finest voxel, the same through a .vdb and for any thread count.
 #include "TestData.h"
 #include "adaptive/LevelFields.h"
+#include "adaptive/LevelMap.h"
 #include "adaptive/Levels.h"
 
 #include <fluidsurf/AdaptiveGrid.h>
@@ -31,16 +32,17 @@ using adaptive::kLevel3;
 using openvdb::Coord;
 
 /// Level maps over the coarse cells [lo, hi]^3: a checkerboard (every face a transition), or
-/// random levels.
-adaptive::LevelTree::Ptr levelMap(int lo, int hi, unsigned seed)
+/// random levels, level 2 with probability level2Share.
+adaptive::LevelTree::Ptr levelMap(int lo, int hi, unsigned seed, double level2Share = 0.5)
 {
     auto t = std::make_shared<adaptive::LevelTree>(0);
     std::mt19937 rng(seed);
+    std::bernoulli_distribution two(level2Share);
     for (int z = lo; z <= hi; ++z)
         for (int y = lo; y <= hi; ++y)
             for (int x = lo; x <= hi; ++x) {
                 const int level = seed == 0 ? ((x + y + z) & 1 ? kLevel3 : kLevel2)
-                                            : (rng() & 1 ? kLevel3 : kLevel2);
+                                            : (two(rng) ? kLevel2 : kLevel3);
                 t->setValueOn(Coord(x, y, z), level);
             }
     return t;
@@ -70,6 +72,60 @@ TEST(AdaptiveLevels, SubsampledPointsAreThoseOnTheClosedBoxOfALevel2Cell)
     EXPECT_GT(yes, 100u);
     EXPECT_GT(no, 100u);
 }
+
+TEST(AdaptiveLevels, Level2IslandsJoinLevel3AndLevel2RegionsStay)
+{
+    // One layer of coarse cells (z = 0), 12 x 12, level 3 but for: a lone level-2 cell, a 2 x 2
+    // block, a strip one cell wide along x, and the rows y >= 9 (a region with straight borders).
+    adaptive::LevelTree levels(0);
+    auto expectedLevel = [](int x, int y) {
+        if (y >= 9) return kLevel2;                               // region: stays
+        if (x >= 2 && x <= 3 && y >= 2 && y <= 3) return kLevel2; // block: 2 against 2
+        return kLevel3; // the lone cell (8, 2) and the strip y = 6 join level 3
+    };
+    for (int y = 0; y < 12; ++y)
+        for (int x = 0; x < 12; ++x) {
+            const bool two =
+                y >= 9 || (x >= 2 && x <= 3 && y >= 2 && y <= 3) || (x == 8 && y == 2) || y == 6;
+            levels.setValueOn(Coord(x, y, 0), two ? kLevel2 : kLevel3);
+        }
+    const adaptive::LevelTree before(levels);
+    Context ctx;
+    const size_t moved = adaptive::closeLevel2Islands(levels, ctx);
+    EXPECT_EQ(moved, 13u); // the lone cell and the strip's 12
+    EXPECT_EQ(levels.activeVoxelCount(), before.activeVoxelCount()); // nothing meshed or unmeshed
+    for (int y = 0; y < 12; ++y)
+        for (int x = 0; x < 12; ++x)
+            ASSERT_EQ(levels.getValue(Coord(x, y, 0)), expectedLevel(x, y)) << x << ", " << y;
+
+    // On random maps: level 3 stays level 3, and what is left is a fixed point (no level-2 cell
+    // with more level-3 than level-2 face neighbours), checked cell by cell.
+    for (unsigned seed = 1; seed <= 3; ++seed) {
+        const auto map = levelMap(-3, 3, seed, 0.75);
+        const adaptive::LevelTree start(*map);
+        adaptive::closeLevel2Islands(*map, ctx);
+        size_t level2 = 0;
+        for (auto v = start.cbeginValueOn(); v; ++v) {
+            const int now = map->getValue(v.getCoord());
+            if (*v == kLevel3) ASSERT_EQ(now, kLevel3) << v.getCoord();
+            if (now != kLevel2) continue;
+            ++level2;
+            int at2 = 0, at3 = 0;
+            for (int f = 0; f < 6; ++f) {
+                Coord q = v.getCoord();
+                q[f / 2] += f & 1 ? 1 : -1;
+                const int l = map->isValueOn(q) ? map->getValue(q) : 0;
+                at2 += l == kLevel2, at3 += l == kLevel3;
+            }
+            ASSERT_LE(at3, at2) << v.getCoord();
+        }
+        EXPECT_GT(level2, 0u) << seed; // the rule does not simply take everything
+    }
+}
+
+/// The level fields on exactly the map a test gives (no probes, no islands closed): the
+/// sub-sampling and the mesher are tested under maps with as many transitions as possible.
+const adaptive::Refinement kMapAsGiven{0.f, false};
 
 /// phi of a sphere, exact at world points, clamped to the background like the field.
 struct Sphere
@@ -105,7 +161,7 @@ TEST(AdaptiveLevels, EveryPointIsEvaluatedOnceAndTheRestIsCopiedOrSubsampledExac
     adaptive::LevelFieldStats stats;
     const openvdb::FloatTree::Ptr level3 =
         adaptive::fillLevels(level2, *levels, analytic(sphere, 2 * dx, seen2),
-                             analytic(sphere, dx, seen3), float(3 * dx), 0.f, ctx, &stats);
+                             analytic(sphere, dx, seen3), float(3 * dx), kMapAsGiven, ctx, &stats);
     for (const auto* seen : {&seen2, &seen3})
         for (auto it = seen->begin(); it != seen->end(); it = seen->upper_bound(*it))
             ASSERT_EQ(seen->count(*it), 1u) << "evaluated twice: " << *it;
@@ -163,8 +219,9 @@ AdaptiveGrid sphereGrid(const Sphere& sphere, double dx, adaptive::LevelTree::Pt
     auto level2 = std::make_shared<openvdb::FloatTree>(float(6 * dx));
     std::multiset<Coord> seen2, seen3;
     Context ctx;
-    auto level3 = adaptive::fillLevels(*level2, *levels, analytic(sphere, 2 * dx, seen2),
-                                       analytic(sphere, dx, seen3), float(3 * dx), 0.f, ctx);
+    auto level3 =
+        adaptive::fillLevels(*level2, *levels, analytic(sphere, 2 * dx, seen2),
+                             analytic(sphere, dx, seen3), float(3 * dx), kMapAsGiven, ctx);
     AdaptiveGrid g;
     g.level2 = openvdb::FloatGrid::create(level2);
     g.level2->setTransform(openvdb::math::Transform::createLinearTransform(2 * dx));
