@@ -12,6 +12,20 @@
 
 #include <malloc.h>
 
+namespace {
+
+/// The options every per-scene benchmark takes: which scenes, runs per case, the data folder.
+void addSceneOptions(CLI::App* cmd, std::string& scenes, int& repeat, std::string& shared)
+{
+    cmd->add_option("--scenes", scenes,
+                    "comma-separated: real, large, hilbert, drop-1M, block-1M, block-4M, ...")
+        ->capture_default_str();
+    cmd->add_option("--repeat", repeat, "runs per case (median)")->capture_default_str();
+    cmd->add_option("--shared", shared, "../shared/data")->capture_default_str();
+}
+
+} // namespace
+
 int main(int argc, char** argv)
 {
     CLI::App app{"fluidsurf_bench - speed and memory of the fluidsurf stages"};
@@ -32,10 +46,7 @@ int main(int argc, char** argv)
     fluidsurf::bench::FieldBenchOptions field;
     CLI::App* fieldCmd =
         app.add_subcommand("field", "rasterize per stage: narrow band vs baselines vs OpenVDB");
-    fieldCmd
-        ->add_option("--scenes", field.scenes,
-                     "real, hilbert, drop-1M, block-4M, ... (comma-separated)")
-        ->capture_default_str();
+    addSceneOptions(fieldCmd, field.scenes, field.repeat, field.shared);
     fieldCmd->add_option("--voxel", field.voxels, "voxel sizes in r (comma-separated)")
         ->capture_default_str();
     fieldCmd->add_option("--support", field.supports, "influence radii R in r (comma-separated)")
@@ -45,57 +56,39 @@ int main(int argc, char** argv)
                      "narrow-band, narrow-band-1 (one thread), narrow-band-cuda, "
                      "gather-full, scatter, p2ls, smooth")
         ->capture_default_str();
-    fieldCmd->add_option("--repeat", field.repeat, "runs per case (median)")->capture_default_str();
-    fieldCmd->add_option("--shared", field.shared, "../shared/data")->capture_default_str();
     fluidsurf::bench::MeshBenchOptions mesh;
     CLI::App* meshCmd = app.add_subcommand(
         "mesh", "meshing stage: our marching cubes vs volumeToMesh; whole pipeline");
-    meshCmd
-        ->add_option("--scenes", mesh.scenes,
-                     "real, hilbert, drop-1M, block-4M, ... (comma-separated)")
-        ->capture_default_str();
+    addSceneOptions(meshCmd, mesh.scenes, mesh.repeat, mesh.shared);
     meshCmd->add_option("--voxel", mesh.voxels, "voxel sizes in r (comma-separated)")
         ->capture_default_str();
-    meshCmd->add_option("--repeat", mesh.repeat, "runs per case (median)")->capture_default_str();
-    meshCmd->add_option("--shared", mesh.shared, "../shared/data")->capture_default_str();
     meshCmd->add_option("--dir", mesh.dir, "folder for the whole-pipeline OBJ")
         ->capture_default_str();
     fluidsurf::bench::PostBenchOptions post;
     CLI::App* postCmd = app.add_subcommand(
         "post", "decimation, smoothing and subdivision per scene (thesis Table 5.1) vs OpenMesh's "
                 "Decimater");
-    postCmd
-        ->add_option("--scenes", post.scenes,
-                     "real, large, hilbert, drop-1M, ... (comma-separated)")
-        ->capture_default_str();
+    addSceneOptions(postCmd, post.scenes, post.repeat, post.shared);
     postCmd->add_option("--decimate", post.decimate, "share of the triangles removed")
         ->capture_default_str();
     postCmd->add_option("--decimate-error", post.decimateError, "error bound, voxels (0: none)")
         ->capture_default_str();
     postCmd->add_option("--smooth", post.smooth, "rounds of smoothing")->capture_default_str();
-    postCmd->add_option("--repeat", post.repeat, "runs per case (median)")->capture_default_str();
     postCmd
         ->add_option("--openmesh-repeat", post.openMeshRepeat,
                      "runs of OpenMesh's serial Decimater per case (0: skip it)")
         ->capture_default_str();
-    postCmd->add_option("--shared", post.shared, "../shared/data")->capture_default_str();
     fluidsurf::bench::AdaptiveBenchOptions adaptive;
     CLI::App* adaptiveCmd = app.add_subcommand(
         "adaptive", "the 3-level grid against uniform grids of voxel r and 2r and OpenVDB's "
                     "adaptive volumeToMesh (thesis Tables 6.1-6.3)");
-    adaptiveCmd
-        ->add_option("--scenes", adaptive.scenes,
-                     "scenes: large, real, hilbert, drop-1M, ... (comma-separated)")
-        ->capture_default_str();
+    addSceneOptions(adaptiveCmd, adaptive.scenes, adaptive.repeat, adaptive.shared);
     adaptiveCmd->add_option("--curvature-threshold", adaptive.curvatureThreshold)
         ->capture_default_str();
     adaptiveCmd
         ->add_option("--level-tolerance", adaptive.levelTolerance,
                      "of the 'adaptive' rows, in voxels")
         ->capture_default_str();
-    adaptiveCmd->add_option("--repeat", adaptive.repeat, "runs per case (median)")
-        ->capture_default_str();
-    adaptiveCmd->add_option("--shared", adaptive.shared, "../shared/data")->capture_default_str();
     bool coldAllocator = false;
     app.add_flag(
         "--cold-allocator", coldAllocator,
