@@ -89,15 +89,15 @@ c = json.load(open('$T/adaptive.json'))['frames'][0]['counts']
 assert c['level2_cells'] + c['level3_cells'] > 0 and c['open_cracks'] == 0, c
 assert c['level2_triangles'] + c['level3_triangles'] + c['patch_triangles'] == c['raw_triangles'], c"
 out=$("$BIN" mesh "$T/adaptive.vdb" -o "$T/adaptive_v.ply" -v --stats "$T/adaptive_mesh.json")
-check "adaptive: -v prints cells and triangles per level and patches, as --stats counts them" \
+check "adaptive: -v prints cells and triangles per level, patches and merged points, as --stats counts them" \
     /usr/bin/python3 -c "
 import json, re, sys
 c = json.load(open('$T/adaptive_mesh.json'))['frames'][0]['counts']
-m = re.search(r'adaptive grid: level 2 (\d+) cells, (\d+) triangles; level 3 (\d+) cells, (\d+) triangles; crack patches (\d+) triangles', sys.argv[1])
+m = re.search(r'adaptive grid: level 2 (\d+) cells, (\d+) triangles; level 3 (\d+) cells, (\d+) triangles; crack patches (\d+) triangles \([0-9.]+%\), (\d+) crack points merged', sys.argv[1])
 assert m, 'no adaptive line in -v'
 got = [int(g) for g in m.groups()]
-assert got == [c['level2_cells'], c['level2_triangles'], c['level3_cells'], c['level3_triangles'], c['patch_triangles']], (got, c)
-assert got[0] > 0 and got[2] > 0 and got[4] > 0, got" "$out"
+assert got == [c['level2_cells'], c['level2_triangles'], c['level3_cells'], c['level3_triangles'], c['patch_triangles'], c['merged_crack_points']], (got, c)
+assert got[0] > 0 and got[2] > 0 and got[4] + got[5] > 0, got" "$out"
 expect_error "adaptive: refused with the gather-full baseline" "narrow-band method only" \
     "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/x.ply" --adaptive --method gather-full
 

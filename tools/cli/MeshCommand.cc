@@ -121,7 +121,8 @@ void addPostCounts(const PostProcessStats& s, std::vector<std::pair<std::string,
     counts.push_back({"decimate_error_voxels", s.decimateError});
 }
 
-/// --stats and -v counts of the adaptive mesher: triangles per level, crack patches (cells per
+/// --stats and -v counts of the adaptive mesher: triangles per level, crack patches and merged
+/// crack points (cells per
 /// level too where no field counts give them).
 void addAdaptiveCounts(const AdaptiveMeshStats& s,
                        std::vector<std::pair<std::string, double>>& counts, bool cells)
@@ -133,6 +134,7 @@ void addAdaptiveCounts(const AdaptiveMeshStats& s,
     counts.push_back({"level2_triangles", double(s.level2Triangles)});
     counts.push_back({"level3_triangles", double(s.level3Triangles)});
     counts.push_back({"patch_triangles", double(s.patchTriangles)});
+    counts.push_back({"merged_crack_points", double(s.mergedCrackPoints)});
     counts.push_back({"open_cracks", double(s.openCracks)});
 }
 

@@ -306,8 +306,10 @@ void printAdaptiveCounts(const std::vector<std::pair<std::string, double>>& coun
             "to complete the surface)",
             *refined, count("level3_island_cells").value_or(0),
             count("level3_completion_cells").value_or(0));
-    std::printf(", %.0f triangles; crack patches %.0f triangles (%.2f%%)", *t3, *patches,
-                all > 0 ? 100 * *patches / all : 0.0);
+    std::printf(", %.0f triangles; crack patches %.0f triangles (%.2f%%), %.0f crack points "
+                "merged",
+                *t3, *patches, all > 0 ? 100 * *patches / all : 0.0,
+                count("merged_crack_points").value_or(0));
     if (const auto open = count("open_cracks"); open && *open > 0)
         std::printf("; %.0f cracks left open", *open);
     std::printf("\n");

@@ -55,17 +55,31 @@ struct AdaptiveMeshStats
     size_t level2Cells = 0, level3Cells = 0;         ///< coarse cells meshed at each level
     size_t level2Triangles = 0, level3Triangles = 0; ///< from the cells of each level
     size_t patchTriangles = 0;                       ///< closing the cracks (§6.2.3)
+    /// Level-3 points of cracks merged into the crossings of their level-2 edge, closing those
+    /// cracks with no triangle added (adaptive/CollapseCracks.h); each takes one level-3
+    /// triangle away.
+    size_t mergedCrackPoints = 0;
     /// Cracks that could not be closed (their edges did not form loops); 0 unless the grids
     /// were changed by hand. The mesh then has boundary edges there.
     size_t openCracks = 0;
 };
 
+struct AdaptiveMeshOptions
+{
+    /// Close a crack with one level-2 edge by merging its level-3 points into that edge's ends
+    /// where the mesh stays manifold and unfolded (fewer triangles, no slivers); false: always
+    /// cut the level-2 triangle at them (one triangle more per point), as the thesis patches.
+    bool mergeCrackPoints = true;
+};
+
 /// One indexed mesh of the zero crossing: marching cubes in every level-2 cell at 2 dx and
 /// every level-3 cell at dx, sharing the vertices of their common edges, with the cracks
-/// between levels closed by patch triangles. Closed and manifold wherever the uniform mesher's
-/// is; counter-clockwise seen from outside; angle-weighted vertex normals. Parallel over coarse
-/// cells (ctx.checkpoint() per range), identical for any thread count. Timed as "mesh".
+/// between levels closed (merged points, cut triangles, patch fans). Closed and manifold
+/// wherever the uniform mesher's is; counter-clockwise seen from outside; angle-weighted vertex
+/// normals. Parallel over coarse cells (ctx.checkpoint() per range), identical for any thread
+/// count. Timed as "mesh".
 TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx,
-                              AdaptiveMeshStats* stats = nullptr);
+                              AdaptiveMeshStats* stats = nullptr,
+                              const AdaptiveMeshOptions& options = {});
 
 } // namespace fluidsurf

@@ -12,8 +12,11 @@
 // the face the level-3 side can bend through crossings of its own (Fig. 6.6). Each cell records
 // the polygon edges it puts on such a face, by the level-2 face square they lie in. Per square,
 // edges found in both directions cancel (the two sides agree there); the rest chain into loops
-// (each side's edges run opposite ways around the gap), and each loop is fanned with the
+// (each side's edges run opposite ways around the gap). A loop with one level-2 edge has its
+// level-3 points merged into that edge's ends (CollapseCracks.h), or where a merge would fold or
+// pinch the mesh, the level-2 triangle is cut at them; any other loop is fanned with the
 // opposite orientation. Every edge of the loop then has its second triangle: the mesh is closed.
+#include "adaptive/CollapseCracks.h"
 #include "adaptive/Levels.h"
 #include "mesh/CellPolygons.h"
 #include "post/Normals.h"
@@ -280,8 +283,9 @@ struct CellMesher
 };
 
 /// The cracks of one face square: its edges chained into loops. A loop with one level-2 edge
-/// becomes a Split (that edge's triangle is cut at the level-3 points: no sliver in the face
-/// plane, where the level-3 path can run straight along the level-2 edge); any other loop is
+/// becomes a Split (its level-3 points are merged into the edge's ends, or that edge's triangle
+/// is cut at them: no sliver in the face plane, where the level-3 path can run straight along
+/// the level-2 edge); any other loop is
 /// fanned with the opposite orientation into patches. Returns false when the edges do not close
 /// into loops.
 bool closeSquare(std::vector<Segment>::const_iterator begin,
@@ -336,7 +340,8 @@ bool closeSquare(std::vector<Segment>::const_iterator begin,
 
 } // namespace
 
-TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMeshStats* stats)
+TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMeshStats* stats,
+                              const AdaptiveMeshOptions& options)
 {
     const auto timer = ctx.scope("mesh");
     if (grid.empty() || !grid.level3 || !grid.levels)
@@ -439,24 +444,38 @@ TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMe
                 mesh.triangles[first[b] + t] = {g[k[3 * t]], g[k[3 * t + 1]], g[k[3 * t + 2]]};
         });
     }
+    // Cracks with one level-2 edge: their level-3 points merge into the edge's ends where they
+    // can (CollapseCracks.h); the rest cut the level-2 triangle, below.
+    std::vector<adaptive::CrackPath> paths;
+    std::vector<size_t> cutTriangle;
+    for (size_t q = 0; q < squares; ++q)
+        for (const Split& sp : splits[q]) {
+            adaptive::CrackPath path{indexOf(sp.a), indexOf(sp.b), {}};
+            for (const Key& k : sp.between)
+                path.between.push_back(indexOf(k));
+            paths.push_back(std::move(path));
+            cutTriangle.push_back(first[sp.block] + sp.triangle);
+        }
+    std::vector<char> removed;
+    if (options.mergeCrackPoints)
+        s.mergedCrackPoints = adaptive::collapseCracks(mesh, paths, removed);
     // Splits: a triangle cut by cracks is fanned from the corner opposite each cut edge through
     // the crack's level-3 points, one cut after the other (a level-2 cell's corner triangle can
     // be cut on two edges, by two level-3 faces).
     const size_t before = mesh.triangles.size();
     {
-        std::vector<std::pair<size_t, const Split*>> cut;
-        for (size_t q = 0; q < squares; ++q)
-            for (const Split& sp : splits[q])
-                cut.emplace_back(first[sp.block] + sp.triangle, &sp);
-        std::sort(cut.begin(), cut.end(),
-                  [](const auto& a, const auto& b) { return a.first < b.first; });
+        std::vector<std::pair<size_t, const adaptive::CrackPath*>> cut;
+        for (size_t i = 0; i < paths.size(); ++i)
+            if (!paths[i].between.empty()) cut.emplace_back(cutTriangle[i], &paths[i]);
+        std::stable_sort(cut.begin(), cut.end(),
+                         [](const auto& a, const auto& b) { return a.first < b.first; });
         std::vector<std::array<uint32_t, 3>> pieces;
         for (size_t i = 0; i < cut.size();) {
             const size_t tri = cut[i].first;
             pieces.assign(1, mesh.triangles[tri]);
             for (; i < cut.size() && cut[i].first == tri; ++i) {
-                const Split& sp = *cut[i].second;
-                const uint32_t a = indexOf(sp.a), b = indexOf(sp.b);
+                const adaptive::CrackPath& sp = *cut[i].second;
+                const uint32_t a = sp.a, b = sp.b;
                 size_t piece = 0;
                 int k = 3;
                 for (; piece < pieces.size() && k == 3; ++piece)
@@ -470,7 +489,7 @@ TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMe
                 const uint32_t c = pieces[piece][(k + 2) % 3];
                 uint32_t prev = a;
                 for (size_t j = 0; j <= sp.between.size(); ++j) {
-                    const uint32_t next = j < sp.between.size() ? indexOf(sp.between[j]) : b;
+                    const uint32_t next = j < sp.between.size() ? sp.between[j] : b;
                     const std::array<uint32_t, 3> t{prev, next, c};
                     if (j == 0)
                         pieces[piece] = t;
@@ -489,6 +508,25 @@ TriangleMesh meshAdaptiveGrid(const AdaptiveGrid& grid, Context& ctx, AdaptiveMe
             mesh.triangles.push_back({indexOf(t[0]), indexOf(t[1]), indexOf(t[2])});
     }
     s.patchTriangles = mesh.triangles.size() - before;
+    // The level-3 triangles the merges flattened (all made by the cells, before the cuts).
+    size_t kept = 0;
+    for (size_t t = 0; t < mesh.triangles.size(); ++t)
+        if (t >= removed.size() || !removed[t]) mesh.triangles[kept++] = mesh.triangles[t];
+    s.level3Triangles -= mesh.triangles.size() - kept;
+    mesh.triangles.resize(kept);
+    if (s.mergedCrackPoints > 0) { // the merged points are in no triangle: drop them, in order
+        std::vector<uint32_t> renumber(mesh.points.size(), 0);
+        for (const auto& t : mesh.triangles)
+            for (uint32_t v : t)
+                renumber[v] = 1;
+        uint32_t used = 0;
+        for (size_t i = 0; i < mesh.points.size(); ++i)
+            if (renumber[i]) mesh.points[used] = mesh.points[i], renumber[i] = used++;
+        mesh.points.resize(used);
+        for (auto& t : mesh.triangles)
+            for (uint32_t& v : t)
+                v = renumber[v];
+    }
     step.emplace(ctx.timing(), "normals");
     post::computeAngleWeightedNormals(mesh);
     if (stats) *stats = s;

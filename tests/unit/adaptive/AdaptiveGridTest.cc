@@ -265,32 +265,44 @@ TEST(AdaptiveMesh, SpheresUnderEveryKindOfLevelMapAreClosedAndBetweenTheUniformM
              {Sphere{{0.0, 0.0, 0.0}, 0.8}, Sphere{{0.13, -0.07, 0.21}, 0.93},
               Sphere{{0.4, 0.4, 0.4}, 0.57}}) {
             const AdaptiveGrid grid = sphereGrid(sphere, dx, levelMap(-3, 2, seed));
-            Context ctx;
-            AdaptiveMeshStats stats;
-            const TriangleMesh mesh = meshAdaptiveGrid(grid, ctx, &stats);
-            const MeshReport report = checkMesh(mesh);
-            SCOPED_TRACE("seed " + std::to_string(seed) + ", radius " +
-                         std::to_string(sphere.radius));
-            EXPECT_TRUE(report.watertight()) << describe(report);
-            EXPECT_EQ(report.components, 1u);
-            EXPECT_EQ(stats.openCracks, 0u);
-            EXPECT_GT(stats.level2Triangles, 0u);
-            EXPECT_GT(stats.level3Triangles, 0u);
-            EXPECT_GT(stats.patchTriangles, 0u); // the maps cut the sphere at many transitions
-            EXPECT_EQ(stats.level2Triangles + stats.level3Triangles + stats.patchTriangles,
-                      mesh.triangles.size());
-            // Off the sphere by about the uniform mesh's at 2 dx: points on a transition face
-            // sit on the bilinear interpolant of a 2 dx face, up to about twice the chord error
-            // of a 2 dx edge. Its volume between the uniform meshes' at 2 dx and dx (marching
-            // cubes' chords cut into the sphere).
             const TriangleMesh fine = uniformSphere(sphere, dx, 1.3),
                                coarse = uniformSphere(sphere, 2 * dx, 1.3);
-            EXPECT_LE(offSphere(mesh, sphere), 2.5 * offSphere(coarse, sphere));
-            const double vFine = checkMesh(fine).volume, vCoarse = checkMesh(coarse).volume;
-            ASSERT_LT(vCoarse, vFine);
-            EXPECT_GT(report.volume, vCoarse);
-            EXPECT_LT(report.volume, vFine);
-            ASSERT_EQ(mesh.normals.size(), mesh.points.size());
+            size_t cutTriangles = 0;
+            for (bool merge : {false, true}) { // the cracks cut, then merged where they can be
+                Context ctx;
+                AdaptiveMeshStats stats;
+                const TriangleMesh mesh = meshAdaptiveGrid(grid, ctx, &stats, {merge});
+                const MeshReport report = checkMesh(mesh);
+                SCOPED_TRACE("seed " + std::to_string(seed) + ", radius " +
+                             std::to_string(sphere.radius) + (merge ? ", merged" : ", cut"));
+                EXPECT_TRUE(report.watertight()) << describe(report);
+                EXPECT_EQ(report.components, 1u);
+                EXPECT_EQ(report.unusedVertices, 0u);
+                EXPECT_EQ(stats.openCracks, 0u);
+                EXPECT_GT(stats.level2Triangles, 0u);
+                EXPECT_GT(stats.level3Triangles, 0u);
+                EXPECT_EQ(stats.level2Triangles + stats.level3Triangles + stats.patchTriangles,
+                          mesh.triangles.size());
+                if (!merge) {
+                    EXPECT_EQ(stats.mergedCrackPoints, 0u);
+                    EXPECT_GT(stats.patchTriangles, 0u); // the maps cut it at many transitions
+                    cutTriangles = mesh.triangles.size();
+                } else {
+                    // Each merged point takes a level-3 triangle away instead of adding one.
+                    EXPECT_GT(stats.mergedCrackPoints, 0u);
+                    EXPECT_LT(mesh.triangles.size(), cutTriangles);
+                }
+                // Off the sphere by about the uniform mesh's at 2 dx: points on a transition
+                // face sit on the bilinear interpolant of a 2 dx face, up to about twice the
+                // chord error of a 2 dx edge. Its volume between the uniform meshes' at 2 dx
+                // and dx (marching cubes' chords cut into the sphere).
+                EXPECT_LE(offSphere(mesh, sphere), 2.5 * offSphere(coarse, sphere));
+                const double vFine = checkMesh(fine).volume, vCoarse = checkMesh(coarse).volume;
+                ASSERT_LT(vCoarse, vFine);
+                EXPECT_GT(report.volume, vCoarse);
+                EXPECT_LT(report.volume, vFine);
+                ASSERT_EQ(mesh.normals.size(), mesh.points.size());
+            }
         }
 }
 
