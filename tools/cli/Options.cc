@@ -265,6 +265,7 @@ std::vector<std::pair<std::string, double>> fieldCounts(const RasterizeStats& s)
                                      {"level3_completion_cells", double(s.completionCells)},
                                      {"level3_refined_cells", double(s.refinedCells)},
                                      {"level3_island_cells", double(s.islandCells)},
+                                     {"level2_crossing_probes", double(s.level2CrossingProbes)},
                                      {"subsampled_values", double(s.subsampled)}});
     return counts;
 }

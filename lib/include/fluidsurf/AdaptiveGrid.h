@@ -11,14 +11,17 @@
 // ordinary VDB grid that any VDB tool opens:
 //   "surface"       FloatGrid, level set, voxel 2 dx: the whole surface at level 2 (a complete
 //                   narrow-band level set of its own, the coarse preview)
-//   "surface_fine"  FloatGrid, level set, voxel dx: every grid point of the level-3 cells
+//   "surface_fine"  FloatGrid, level set, voxel dx: every grid point of the level-3 cells, and
+//                   the field at the middle of each level-2 edge the surface crosses away from
+//                   level 3 (it places that edge's vertex where the uniform mesh of dx has it)
 //   "levels"        Int32Grid, voxel 4 dx: per coarse cell that is meshed, its level (2 or 3);
 //                   cell (I,J,K) spans the level-3 points 4I..4I+4 along each axis
 // Values on a face (or edge) that a level-3 cell shares with a level-2 cell are not the field's
 // but sub-sampled from the level-2 values (thesis Fig. 6.4): linear along a level-2 edge,
 // bilinear (the mean of four) at a level-2 face centre. Both sides then see the same function on
 // that face, so their crossings on its outer edges coincide and the remaining cracks are small
-// planar polygons, closed by patch triangles (§6.2.3).
+// planar polygons, closed by merging level-3 points into level-2 crossings or by patch
+// triangles (§6.2.3).
 #pragma once
 
 #include <fluidsurf/Context.h>

@@ -57,6 +57,9 @@ struct RasterizeStats
     size_t level2Cells = 0, level3Cells = 0, completionCells = 0, subsampled = 0;
     size_t refinedCells = 0; ///< flat cells refined where level 2 missed (levelTolerance)
     size_t islandCells = 0;  ///< level-2 cells moved to level 3 as islands among level 3
+    /// Level-3 values kept at the middle of level-2 edges away from level 3: they place those
+    /// edges' vertices (adaptive/LevelFields.h).
+    size_t level2CrossingProbes = 0;
 };
 
 struct RasterizeResult

@@ -244,6 +244,19 @@ FloatTree::Ptr refineWhereLevel2Misses(const FloatTree& level2, LevelTree& level
     return probes;
 }
 
+/// The probes at the middle of a level-2 edge (one odd coordinate), in a tree of their own.
+FloatTree::Ptr edgeMiddles(const FloatTree& probes, Context& ctx)
+{
+    auto middles = std::make_shared<FloatTree>(probes);
+    forEachVoxel(
+        *middles, ctx, [] { return 0; },
+        [](auto& v, int) {
+            const Coord p = v.getCoord();
+            if ((p.x() & 1) + (p.y() & 1) + (p.z() & 1) != 1) v.setValueOff();
+        });
+    return middles;
+}
+
 } // namespace
 
 openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels,
@@ -255,6 +268,7 @@ openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels
     const float tolerance = refinement.tolerance;
     LevelFieldStats s;
     auto probes = std::make_shared<FloatTree>(background3);
+    auto crossings = std::make_shared<FloatTree>(background3); // probes at level-2 edges' middles
     bool firstRound = true;
     auto level3 = std::make_shared<FloatTree>(background3);
     std::vector<Coord> cells;
@@ -274,9 +288,11 @@ openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels
             s.level2Evaluated += grown.activeVoxelCount();
             level2.merge(grown);
         }
-        if (firstRound && tolerance > 0)
+        if (firstRound && tolerance > 0) {
             probes =
                 refineWhereLevel2Misses(level2, levels, evaluate3, background3, tolerance, ctx, s);
+            crossings = edgeMiddles(*probes, ctx);
+        }
         if (firstRound && refinement.closeIslands) s.islandCells = closeLevel2Islands(levels, ctx);
         firstRound = false;
         // Level 3: the 125 points of every new level-3 cell, split into evaluated and taken from
@@ -354,6 +370,14 @@ openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels
         s.completionCells += added.size();
         cells = std::move(added);
     }
+    // The crossings' probes that no level-3 cell reads: they place level 2's vertices.
+    forEachVoxel(
+        *crossings, ctx, [&] { return LevelLookup(levels); },
+        [](auto& v, LevelLookup& lookup) {
+            if (lookup.touches(v.getCoord(), kLevel3)) v.setValueOff();
+        });
+    s.crossingProbes = crossings->activeVoxelCount();
+    level3->merge(*crossings);
     if (stats) *stats = s;
     return level3;
 }

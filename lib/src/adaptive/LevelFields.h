@@ -34,6 +34,7 @@ struct LevelFieldStats
     size_t probes = 0;          ///< level-3 probes of level-2 cells (tolerance > 0)
     size_t refinedCells = 0;    ///< level-2 cells the probes moved to level 3
     size_t islandCells = 0;     ///< level-2 cells moved to level 3 as islands (LevelMap.h)
+    size_t crossingProbes = 0;  ///< probes kept in level 3 to place level-2 vertices
 };
 
 /// Which level-2 cells move to level 3 before level 3 is filled (beyond the level map's own).
@@ -51,6 +52,9 @@ struct Refinement
 /// crossing's own move from the level-2 edge to the level-3 half-edge; at a centre, phi's change
 /// over its gradient. The probes' values are kept for the cells that end up at level 3. Then,
 /// with closeIslands, level-2 islands among level 3 join it (closeLevel2Islands, LevelMap.h).
+/// The probes at the middle of level-2 edges that no level-3 cell touches in the end stay in
+/// the level-3 tree: the mesher places those edges' crossings with them (on the level-3
+/// half-edge, where the uniform mesh of dx has its vertex), not by level 2's linear guess.
 openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels,
                                    const field::FieldEvaluator& evaluate2,
                                    const field::FieldEvaluator& evaluate3, float background3,

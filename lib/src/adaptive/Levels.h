@@ -50,9 +50,11 @@ public:
     /// Whether level-3 point p lies on the closed box of a level-2 cell: its value there is
     /// sub-sampled from level 2. Only points with an odd coordinate can be (even points are
     /// level-2 points), and only those on a coarse face or edge.
-    bool subsampled(const Coord& p)
+    bool subsampled(const Coord& p) { return ((p.x() | p.y() | p.z()) & 1) && touches(p, kLevel2); }
+
+    /// Whether level-3 point p lies on the closed box of a coarse cell at the level.
+    bool touches(const Coord& p, int at)
     {
-        if (!((p.x() | p.y() | p.z()) & 1)) return false;
         int lo[3], hi[3];
         for (int a = 0; a < 3; ++a) {
             hi[a] = p[a] >> 2;
@@ -61,7 +63,7 @@ public:
         for (int z = lo[2]; z <= hi[2]; ++z)
             for (int y = lo[1]; y <= hi[1]; ++y)
                 for (int x = lo[0]; x <= hi[0]; ++x)
-                    if (level(Coord(x, y, z)) == kLevel2) return true;
+                    if (level(Coord(x, y, z)) == at) return true;
         return false;
     }
 

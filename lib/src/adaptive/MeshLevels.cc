@@ -131,12 +131,23 @@ struct CellMesher
     }
 
     /// The vertex of a level-2 edge from level-3 point p (even) along axis, end values a, b.
-    VertexRecord level2Vertex(const Coord& p, int axis, float a, float b) const
+    /// Where level 3 holds the edge's middle and no level-3 cell touches it (a probe kept by
+    /// LevelFields.h), the crossing is on the level-3 half-edge, as the uniform mesh of dx
+    /// places it; else it is level 2's, as the level-3 cells on a transition compute it too.
+    VertexRecord level2Vertex(const Coord& p, int axis, float a, float b,
+                              adaptive::LevelLookup& levels, FloatAccessor& v3) const
     {
-        const float m = adaptive::midValue(a, b);
+        const Coord middle = offset(p, axis, 1);
+        float m = 0;
+        if (v3.probeValue(middle, m) && !levels.touches(middle, kLevel3)) {
+            const bool firstHalf = mesh::inside(a) != mesh::inside(m);
+            return {keyOf(firstHalf ? p : middle, axis),
+                    firstHalf ? world(p, axis, mesh::crossing(a, m))
+                              : world(middle, axis, mesh::crossing(m, b))};
+        }
+        m = adaptive::midValue(a, b);
         const bool firstHalf = mesh::inside(a) != mesh::inside(m);
-        return {keyOf(firstHalf ? p : offset(p, axis, 1), axis),
-                world(p, axis, 2 * mesh::crossing(a, b))};
+        return {keyOf(firstHalf ? p : middle, axis), world(p, axis, 2 * mesh::crossing(a, b))};
     }
 
     /// The values of the (n + 1)^3 lattice points from lo into value[z][y][x], NaN where a point
@@ -221,7 +232,7 @@ struct CellMesher
                 const float a = c[low], b = c[low | 1 << axis];
                 vertex[e] = uint32_t(out.vertices.size());
                 known = int32_t(vertex[e]);
-                out.vertices.push_back(level == kLevel2 ? level2Vertex(p, axis, a, b)
+                out.vertices.push_back(level == kLevel2 ? level2Vertex(p, axis, a, b, levels, v3)
                                                         : level3Vertex(p, axis, a, b, levels, v2));
             }
             auto key = [&](int e) { return out.vertices[vertex[e]].key; };

@@ -166,6 +166,7 @@ struct Run
         stats.completionCells = f.completionCells, stats.subsampled = f.subsampled;
         stats.refinedCells = f.refinedCells;
         stats.islandCells = f.islandCells;
+        stats.level2CrossingProbes = f.crossingProbes;
         for (auto v = levels->cbeginValueOn(); v; ++v)
             (*v == adaptive::kLevel3 ? stats.level3Cells : stats.level2Cells) += 1;
         return level3;

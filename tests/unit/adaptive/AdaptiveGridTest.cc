@@ -344,6 +344,23 @@ TriangleMesh level3Points(const TriangleMesh& mesh, const AdaptiveGrid& grid)
     return out;
 }
 
+/// How many of points have no point of `to` within `tolerance` on every axis.
+size_t unmatched(const std::vector<Vec3f>& points, std::vector<Vec3f> to, double tolerance)
+{
+    auto byX = [](const Vec3f& p, const Vec3f& q) { return p.x < q.x; };
+    std::sort(to.begin(), to.end(), byX);
+    const float t = float(tolerance);
+    size_t n = 0;
+    for (const Vec3f& p : points) {
+        bool found = false;
+        for (auto q = std::lower_bound(to.begin(), to.end(), Vec3f{p.x - t, 0, 0}, byX);
+             q != to.end() && q->x <= p.x + t && !found; ++q)
+            found = std::abs(q->y - p.y) <= t && std::abs(q->z - p.z) <= t;
+        n += !found;
+    }
+    return n;
+}
+
 /// The acceptance on one frame: closed like the uniform mesh, within 0.5 r of it both ways and
 /// within 0.1 r inside level-3 regions, and no more triangles.
 void expectCloseToUniform(const ParticleSet& ps, double r, const std::string& name)
@@ -398,20 +415,41 @@ TEST(AdaptiveReconstruct, WithEveryCellAtTheFinestLevelItIsTheUniformMesh)
         EXPECT_EQ(a.adaptiveMesh.patchTriangles, 0u);
         EXPECT_EQ(a.mesh.triangles.size(), u.mesh.triangles.size());
         ASSERT_EQ(a.mesh.points.size(), u.mesh.points.size());
-        std::vector<Vec3f> uniform = u.mesh.points;
-        auto byX = [](const Vec3f& p, const Vec3f& q) { return p.x < q.x; };
-        std::sort(uniform.begin(), uniform.end(), byX);
-        const float tolerance = float(1e-5 * sp.radius);
-        size_t unmatched = 0;
+        EXPECT_EQ(unmatched(a.mesh.points, u.mesh.points, 1e-5 * sp.radius), 0u)
+            << sceneName(scene);
+    }
+}
+
+TEST(AdaptiveReconstruct, Level2VerticesAwayFromLevel3AreTheUniformMeshsVertices)
+{
+    // A level-2 edge's crossing away from level 3 is placed with the level-3 probe at its
+    // middle, on the level-3 half-edge: where the uniform mesh of dx has its vertex (within
+    // 1e-5 r, as above). Level 2's own linear guess along 2 dx would be off by up to ~0.2 r.
+    SceneParams sp;
+    sp.count = 20000;
+    for (Scene scene : {Scene::Drop, Scene::Slab}) {
+        SCOPED_TRACE(sceneName(scene));
+        const ParticleSet ps = generateScene(scene, sp);
+        Context ctx;
+        const ReconstructResult a = reconstruct(ps, rawParams(sp.radius, true), ctx, "a");
+        const ReconstructResult u = reconstruct(ps, rawParams(sp.radius, false), ctx, "u");
+        // The points with no level-3 cell among the 27 coarse cells around them.
+        const AdaptiveGrid& g = a.adaptiveGrid;
+        const double cell = g.levels->voxelSize()[0];
+        openvdb::Int32Grid::ConstAccessor acc = g.levels->getConstAccessor();
+        std::vector<Vec3f> flat;
         for (const Vec3f& p : a.mesh.points) {
-            bool found = false;
-            for (auto q = std::lower_bound(uniform.begin(), uniform.end(),
-                                           Vec3f{p.x - tolerance, 0, 0}, byX);
-                 q != uniform.end() && q->x <= p.x + tolerance && !found; ++q)
-                found = std::abs(q->y - p.y) <= tolerance && std::abs(q->z - p.z) <= tolerance;
-            unmatched += !found;
+            const Coord c(int(std::floor(p.x / cell)), int(std::floor(p.y / cell)),
+                          int(std::floor(p.z / cell)));
+            bool near3 = false;
+            for (int i = 0; i < 27 && !near3; ++i)
+                near3 = acc.getValue(c.offsetBy(i % 3 - 1, i / 3 % 3 - 1, i / 9 - 1)) == kLevel3;
+            if (!near3) flat.push_back(p);
         }
-        EXPECT_EQ(unmatched, 0u) << sceneName(scene);
+        EXPECT_GT(flat.size(), a.mesh.points.size() / 10) << "too few level-2 points to judge";
+        EXPECT_GT(a.field.level2CrossingProbes, flat.size() / 2);
+        EXPECT_EQ(unmatched(flat, u.mesh.points, 1e-5 * sp.radius), 0u)
+            << "of " << flat.size() << " level-2 points";
     }
 }
 
