@@ -163,10 +163,13 @@ size_t collapseCracks(TriangleMesh& mesh, std::vector<CrackPath>& paths, std::ve
         const size_t n = path.between.size();
         size_t toA = n / 2;
         if (n % 2) {
+            // Nearer b by a clear margin: to b; else to a. The margin keeps the choice the same
+            // under rounding (the GPU's values differ from the CPU's by about 1e-6 r), and a
+            // middle point is often as near one end as the other (a flat face).
             const Vec3f& middle = mesh.points[path.between[n / 2]];
-            if (squaredLength(middle, mesh.points[path.a]) <=
-                squaredLength(middle, mesh.points[path.b]))
-                ++toA;
+            const double da = squaredLength(middle, mesh.points[path.a]),
+                         db = squaredLength(middle, mesh.points[path.b]);
+            if (!(db < da * (1 - 1e-3))) ++toA;
         }
         std::vector<char> gone(n, 0);
         for (size_t i = 0; i < toA && merger.merge(path.between[i], path.a); ++i)

@@ -29,11 +29,11 @@ struct CrackPath
 
 /// Merges each path's points into its ends: the first half into a, the second into b (working
 /// inwards from each end, so each point merges into a vertex it shares a triangle with), a
-/// middle one into the nearer end. A merge is done only where afterwards no edge at the end
-/// has two triangles walking it the same way (so none has three), the end's triangles still
-/// form one fan if they close around it, and no triangle that changes turns over or loses its
-/// area; otherwise that point and those further in stay. The triangles that flatten are marked
-/// in `removed` (resized to the triangles); `between` keeps the points left, for cutting the
+/// middle one into b only if clearly nearer (0.1%), else a. A merge is done only where afterwards
+/// no edge at the end has two triangles walking it the same way (so none has three), the end's
+/// triangles still form one fan if they close around it, and no triangle that changes turns over or
+/// loses its area; otherwise that point and those further in stay. The triangles that flatten are
+/// marked in `removed` (resized to the triangles); `between` keeps the points left, for cutting the
 /// level-2 triangle. Serial and in the paths' order, so the result does not depend on threads
 /// (cracks touch about 1% of the triangles). Returns how many points were merged.
 size_t collapseCracks(TriangleMesh& mesh, std::vector<CrackPath>& paths,
