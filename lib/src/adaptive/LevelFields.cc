@@ -244,16 +244,15 @@ FloatTree::Ptr refineWhereLevel2Misses(const FloatTree& level2, LevelTree& level
     return probes;
 }
 
-/// The probes at the middle of a level-2 edge (one odd coordinate), in a tree of their own.
-FloatTree::Ptr edgeMiddles(const FloatTree& probes, Context& ctx)
+/// The probes at the middle of a level-2 edge (one odd coordinate), in leaf order: a list, not
+/// a tree, for the scattered points would each keep a leaf of the probes' alive.
+std::vector<std::pair<Coord, float>> edgeMiddles(const FloatTree& probes)
 {
-    auto middles = std::make_shared<FloatTree>(probes);
-    forEachVoxel(
-        *middles, ctx, [] { return 0; },
-        [](auto& v, int) {
-            const Coord p = v.getCoord();
-            if ((p.x() & 1) + (p.y() & 1) + (p.z() & 1) != 1) v.setValueOff();
-        });
+    std::vector<std::pair<Coord, float>> middles;
+    for (auto v = probes.cbeginValueOn(); v; ++v) {
+        const Coord p = v.getCoord();
+        if ((p.x() & 1) + (p.y() & 1) + (p.z() & 1) == 1) middles.emplace_back(p, *v);
+    }
     return middles;
 }
 
@@ -268,7 +267,7 @@ openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels
     const float tolerance = refinement.tolerance;
     LevelFieldStats s;
     auto probes = std::make_shared<FloatTree>(background3);
-    auto crossings = std::make_shared<FloatTree>(background3); // probes at level-2 edges' middles
+    std::vector<std::pair<Coord, float>> crossings; // probes at level-2 edges' middles
     bool firstRound = true;
     auto level3 = std::make_shared<FloatTree>(background3);
     std::vector<Coord> cells;
@@ -291,7 +290,7 @@ openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels
         if (firstRound && tolerance > 0) {
             probes =
                 refineWhereLevel2Misses(level2, levels, evaluate3, background3, tolerance, ctx, s);
-            crossings = edgeMiddles(*probes, ctx);
+            crossings = edgeMiddles(*probes);
         }
         if (firstRound && refinement.closeIslands) s.islandCells = closeLevel2Islands(levels, ctx);
         firstRound = false;
@@ -371,13 +370,20 @@ openvdb::FloatTree::Ptr fillLevels(openvdb::FloatTree& level2, LevelTree& levels
         cells = std::move(added);
     }
     // The crossings' probes that no level-3 cell reads: they place level 2's vertices.
-    forEachVoxel(
-        *crossings, ctx, [&] { return LevelLookup(levels); },
-        [](auto& v, LevelLookup& lookup) {
-            if (lookup.touches(v.getCoord(), kLevel3)) v.setValueOff();
-        });
-    s.crossingProbes = crossings->activeVoxelCount();
-    level3->merge(*crossings);
+    std::vector<char> keep(crossings.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, crossings.size(), 1024),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          ctx.checkpoint();
+                          LevelLookup lookup(levels);
+                          for (size_t i = r.begin(); i != r.end(); ++i)
+                              keep[i] = !lookup.touches(crossings[i].first, kLevel3);
+                      });
+    {
+        openvdb::tree::ValueAccessor<FloatTree> acc(*level3);
+        for (size_t i = 0; i < crossings.size(); ++i)
+            if (keep[i])
+                acc.setValueOn(crossings[i].first, crossings[i].second), ++s.crossingProbes;
+    }
     if (stats) *stats = s;
     return level3;
 }
