@@ -6,6 +6,7 @@
 #include "Frames.h"
 #include "Options.h"
 #include "Progress.h"
+#include "Sequence.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshCheck.h>
@@ -28,6 +29,7 @@ struct MeshOptions
 {
     std::string input, output, frames, grid, vdb;
     PipelineOptions pipeline;
+    SequenceOptions sequence;
     bool dropNonFinite = false;
 };
 
@@ -296,6 +298,7 @@ Runner addReconstructCommand(CLI::App& app)
         ->capture_default_str()
         ->check(CLI::Range(1e-6, 0.5));
     addPostOptions(cmd, o->pipeline);
+    addSequenceOptions(cmd, o->sequence);
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
@@ -304,6 +307,11 @@ Runner addReconstructCommand(CLI::App& app)
         "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'obj/f_{:04}.obj' --frames 1-100\n"
         "  fluidsurf reconstruct frame.bgeo -o frame.obj -v --stats frame.json   (r estimated)\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.ply --adaptive --vdb frame.vdb\n"
+        "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'ply/f_{:04}.ply' --shard 3/8 \\\n"
+        "      --skip-existing --keep-going     (the 3rd of 8 tasks; re-runs skip finished "
+        "frames)\n"
+        "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'ply/f_{:04}.ply' --shard slurm\n"
+        "      (in sbatch --array=1-100: the frame numbered $SLURM_ARRAY_TASK_ID)\n"
         "The same field as 'rasterize' (all its options), then marching cubes.\n"
         "Ctrl-C stops cleanly (exit code 130): no partial file is left.");
     return [o]() {
@@ -320,13 +328,27 @@ Runner addReconstructCommand(CLI::App& app)
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
         prepareDevice(ctx.device());
-        Progress bar(jobs.size(), "reconstruct", po.quiet);
+        const std::vector<size_t> picked = shardOf(jobs, o->sequence.shard);
+        SequenceRun run(o->sequence, po.quiet);
+        Progress bar(picked.size(), "reconstruct", po.quiet);
         Report report(po);
-        for (size_t i = 0; i < jobs.size(); ++i)
-            forFile(jobs[i].input, [&] {
-                bar.update(i, jobs[i].input);
+        bool radiusChosen = false;
+        for (size_t k = 0; k < picked.size(); ++k) {
+            const size_t i = picked[k];
+            if (run.skip(vdbJobs.empty()
+                             ? std::vector<std::string>{jobs[i].output}
+                             : std::vector<std::string>{jobs[i].output, vdbJobs[i].output}))
+                continue;
+            if (!radiusChosen && i != 0) {
+                chooseSequenceRadiusFrom(po, ctx, jobs[0], ro, params);
+                radiusChosen = true;
+            }
+            run.frame(jobs[i].input, [&] {
+                bar.update(k, jobs[i].input);
                 io::ReadInfo ri;
-                const ParticleSet ps = readFrame(po, ctx, jobs[i].input, ro, ri, i == 0, params);
+                const ParticleSet ps =
+                    readFrame(po, ctx, jobs[i].input, ro, ri, !radiusChosen, params);
+                radiusChosen = true;
                 const ReconstructResult res = reconstruct(ps, params, ctx, jobs[i].input);
                 // The frame's .vdb and mesh appear together, after both were written.
                 io::OutputGroup outputs;
@@ -352,9 +374,10 @@ Runner addReconstructCommand(CLI::App& app)
                                &res.field);
                 stopIfInterrupted(ctx);
             });
+        }
         bar.finish();
         report.finish();
-        return 0;
+        return run.finish("reconstruct", picked.size());
     };
 }
 

@@ -4,12 +4,12 @@
 #include "Frames.h"
 #include "Options.h"
 #include "Progress.h"
+#include "Sequence.h"
 
 #include <fluidsurf/Rasterize.h>
 #include <fluidsurf/io/LevelSetIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
-#include <chrono>
 #include <cstdio>
 #include <memory>
 
@@ -21,6 +21,7 @@ struct RasterizeOptions
 {
     std::string input, output, frames;
     PipelineOptions pipeline;
+    SequenceOptions sequence;
     bool dropNonFinite = false;
 };
 } // namespace
@@ -37,11 +38,14 @@ Runner addRasterizeCommand(CLI::App& app)
     addRunOptions(cmd, o->pipeline, Makes::LevelSet);
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
                   "drop particles with NaN/Inf coordinates instead of failing");
+    addSequenceOptions(cmd, o->sequence);
     cmd->footer(
         "Examples:\n"
         "  fluidsurf rasterize frame.bgeo -r 0.025 -o frame.vdb\n"
         "  fluidsurf rasterize frame.bgeo -r 0.025 --voxel 0.5 -o fine.vdb      (voxel r/2)\n"
         "  fluidsurf rasterize 'sim/f_{:04}.bgeo' -r 0.025 -o 'vdb/f_{:04}.vdb' --frames 1-100\n"
+        "  fluidsurf rasterize 'sim/f_{:04}.bgeo' -r 0.025 -o 'vdb/f_{:04}.vdb' --shard slurm\n"
+        "      --skip-existing --keep-going     (in sbatch --array=1-100)\n"
         "  fluidsurf rasterize frame.bgeo -r 0.025 -o frame.vdb -v --stats frame.json\n"
         "Writes an OpenVDB level set named 'surface' (negative inside, background\n"
         "half-width * voxel). Isolated particles (no neighbour within h) are not in the grid.\n"
@@ -56,14 +60,24 @@ Runner addRasterizeCommand(CLI::App& app)
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
         prepareDevice(ctx.device());
-        Progress bar(jobs.size(), "rasterize", po.quiet);
+        const std::vector<size_t> picked = shardOf(jobs, o->sequence.shard);
+        SequenceRun run(o->sequence, po.quiet);
+        Progress bar(picked.size(), "rasterize", po.quiet);
         Report report(po);
-        const auto start = std::chrono::steady_clock::now();
-        for (size_t i = 0; i < jobs.size(); ++i)
-            forFile(jobs[i].input, [&] {
-                bar.update(i, jobs[i].input);
+        bool radiusChosen = false;
+        for (size_t k = 0; k < picked.size(); ++k) {
+            const size_t i = picked[k];
+            if (run.skip({jobs[i].output})) continue;
+            if (!radiusChosen && i != 0) {
+                chooseSequenceRadiusFrom(po, ctx, jobs[0], ro, params);
+                radiusChosen = true;
+            }
+            run.frame(jobs[i].input, [&] {
+                bar.update(k, jobs[i].input);
                 io::ReadInfo ri;
-                const ParticleSet ps = readFrame(po, ctx, jobs[i].input, ro, ri, i == 0, params);
+                const ParticleSet ps =
+                    readFrame(po, ctx, jobs[i].input, ro, ri, !radiusChosen, params);
+                radiusChosen = true;
                 const RasterizeResult res =
                     rasterizeParticles(ps, params.fieldParams(params.radius), ctx, jobs[i].input);
                 {
@@ -88,13 +102,10 @@ Runner addRasterizeCommand(CLI::App& app)
                 report.frame(jobs[i].input, ctx, fieldCounts(s), &s);
                 stopIfInterrupted(ctx); // Ctrl-C during the write: that frame is complete
             });
+        }
         bar.finish();
         report.finish();
-        const double secs =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (jobs.size() > 1 && !po.quiet)
-            std::printf("rasterized %zu frames in %.2f s\n", jobs.size(), secs);
-        return 0;
+        return run.finish("rasterize", picked.size());
     };
 }
 

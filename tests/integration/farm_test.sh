@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# farm_test.sh FLUIDSURF_BINARY - frame sequences as a farm runs them: a corrupt frame stops the
+# run by default and is reported and passed over with --keep-going; --skip-existing leaves
+# finished frames alone (their files untouched); --shard I/N splits a sequence into disjoint
+# shares that cover it, --shard slurm takes the frame $SLURM_ARRAY_TASK_ID; a shard chooses r
+# from the sequence's first frame, as a whole run does (the same mesh, byte for byte).
+set -u
+BIN=$1
+T=$(mktemp -d /tmp/fluidsurf_farm_XXXXXX)
+trap 'rm -rf "$T"' EXIT
+source "$(dirname "$0")/checks.sh"
+cd "$T"
+
+# Six frames; frame 1 at r = 0.01, the others at r = 0.012 (so r estimated from frame 1 differs
+# from r estimated from any other); frame 4 cut short.
+for f in 1 2 3 4 5 6; do
+    r=0.012; [ $f = 1 ] && r=0.01
+    "$BIN" generate drop --count $((2000 + 100 * f)) -r $r -o "f_000$f.bgeo" >/dev/null
+done
+head -c 300 f_0001.bgeo >f_0004.bgeo
+have() { for f in "$@"; do [ -s "$f" ] || return 1; done; }
+lacks() { for f in "$@"; do [ ! -e "$f" ] || return 1; done; }
+
+# --- the default: the first bad frame stops the run ------------------------------------------
+expect_error "default: a corrupt frame stops the run" "f_0004.bgeo: header promises" \
+    "$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'a_{:04}.ply' --raw -q
+check "default: the frames before it are written" have a_0001.ply a_0002.ply a_0003.ply
+check "default: none after it" lacks a_0004.ply a_0005.ply a_0006.ply
+
+# --- --keep-going: reported, passed over, listed, exit 1 ---------------------------------------
+out=$("$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'k_{:04}.ply' --raw --keep-going 2>k.err)
+rc=$?
+check "--keep-going: exit code 1 (got $rc)" test $rc -eq 1
+check "--keep-going: every good frame written" have k_0001.ply k_0002.ply k_0003.ply k_0005.ply k_0006.ply
+check "--keep-going: no output for the bad one" lacks k_0004.ply
+check "--keep-going: the summary" grep -q "reconstruct 6 frames: 5 done, 0 skipped, 1 failed" <<<"$out"
+check "--keep-going: the error at once, then the list" bash -c "grep -q 'error: f_0004.bgeo: header promises.*(left out: --keep-going)' k.err && grep -A1 '1 frame failed:' k.err | grep -q '^  f_0004.bgeo$'"
+check "--keep-going: every frame's mesh watertight" bash -c "for f in 1 2 3 5 6; do '$BIN' info k_000\$f.ply | grep -q 'check .*watertight' || exit 1; done"
+
+# --- --skip-existing: finished frames untouched ------------------------------------------------
+before=$(stat -c '%Y.%N' k_000[12356].ply | md5sum)
+sleep 1.1
+out=$("$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'k_{:04}.ply' --raw --keep-going --skip-existing 2>/dev/null)
+rc=$?
+check "--skip-existing: the bad frame still fails (exit 1, got $rc)" test $rc -eq 1
+check "--skip-existing: the summary" grep -q "reconstruct 6 frames: 0 done, 5 skipped, 1 failed" <<<"$out"
+check "--skip-existing: the finished files untouched" test "$(stat -c '%Y.%N' k_000[12356].ply | md5sum)" = "$before"
+rm k_0003.ply
+out=$("$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'k_{:04}.ply' --raw --keep-going --skip-existing 2>/dev/null)
+check "--skip-existing: a missing output is made again" bash -c "grep -q '1 done, 4 skipped, 1 failed' <<<'$out' && [ -s k_0003.ply ]"
+
+# --- --shard I/N: disjoint shares that cover the sequence ------------------------------------
+for i in 1 2 3; do
+    "$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o "s${i}_{:04}.ply" --raw --keep-going --shard $i/3 -q 2>/dev/null
+done
+check "--shard i/3: frames 1 and 4 (failed) to shard 1" bash -c "have() { for f; do [ -s \$f ] || return 1; done; }; have s1_0001.ply && ! ls s1_* | grep -qv s1_0001"
+check "--shard i/3: frames 2 and 5 to shard 2, 3 and 6 to shard 3" bash -c "[ \"\$(ls s2_* s3_* | tr '\n' ' ')\" = 's2_0002.ply s2_0005.ply s3_0003.ply s3_0006.ply ' ]"
+check "--shard: the same meshes as the whole run" bash -c "cmp -s s2_0002.ply k_0002.ply && cmp -s s3_0006.ply k_0006.ply"
+
+# --- a shard chooses r from the sequence's first frame ------------------------------------------
+rm -f f_0004.bgeo
+"$BIN" reconstruct 'f_{:04}.bgeo' -o 'e_{:04}.ply' --raw -q
+"$BIN" reconstruct 'f_{:04}.bgeo' -o 'g_{:04}.ply' --raw -q --shard 2/2
+check "--shard without -r: r from frame 1, the whole run's mesh byte for byte" cmp -s g_0002.ply e_0002.ply
+"$BIN" reconstruct 'f_0002.bgeo' -o 'alone.ply' --raw -q
+check "  (r from frame 2 alone gives another mesh)" bash -c "! cmp -s alone.ply e_0002.ply"
+head -c 300 f_0002.bgeo >f_0001.bgeo
+expect_error "--shard without -r and an unreadable first frame" "r is chosen from the sequence's first frame" \
+    "$BIN" reconstruct 'f_{:04}.bgeo' -o 'h_{:04}.ply' --raw -q --shard 2/2 --keep-going
+
+# --- --shard slurm --------------------------------------------------------------------------------
+check "--shard slurm: the frame SLURM_ARRAY_TASK_ID only" bash -c "SLURM_ARRAY_TASK_ID=5 '$BIN' rasterize 'f_{:04}.bgeo' -r 0.01 -o 'v_{:04}.vdb' --shard slurm -q && [ \"\$(ls v_*)\" = v_0005.vdb ]"
+expect_error "--shard slurm outside an array job" "SLURM_ARRAY_TASK_ID is not set" \
+    env -u SLURM_ARRAY_TASK_ID "$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'x_{:04}.ply' --shard slurm
+expect_error "--shard slurm: a frame the sequence lacks" "frame 9 (SLURM_ARRAY_TASK_ID) is not in the sequence" \
+    env SLURM_ARRAY_TASK_ID=9 "$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'x_{:04}.ply' --shard slurm
+expect_error "--shard slurm: not a number" "is not a frame number" \
+    env SLURM_ARRAY_TASK_ID=abc "$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'x_{:04}.ply' --shard slurm
+expect_error "--shard 3/2" "expected I/N with 1 <= I <= N" \
+    "$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'x_{:04}.ply' --shard 3/2
+expect_error "--shard on a single file" "needs a frame pattern" \
+    "$BIN" reconstruct f_0002.bgeo -r 0.01 -o x.ply --shard 1/2
+check "--shard: nothing written by the refused runs" bash -c "! ls x_* x.ply 2>/dev/null | grep -q ."
+
+echo "farm tests: $pass passed, $fail failed"
+[ $fail -eq 0 ]
