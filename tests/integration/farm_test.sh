@@ -3,7 +3,8 @@
 # run by default and is reported and passed over with --keep-going; --skip-existing leaves
 # finished frames alone (their files untouched); --shard I/N splits a sequence into disjoint
 # shares that cover it, --shard slurm takes the frame $SLURM_ARRAY_TASK_ID; a shard chooses r
-# from the sequence's first frame, as a whole run does (the same mesh, byte for byte).
+# from the sequence's first frame, as a whole run does (the same mesh, byte for byte); mesh
+# (and post, through the same loop) pass over a corrupt .vdb.
 set -u
 BIN=$1
 T=$(mktemp -d /tmp/fluidsurf_farm_XXXXXX)
@@ -70,6 +71,15 @@ expect_error "--shard without -r and an unreadable first frame" "r is chosen fro
 
 # --- --shard slurm --------------------------------------------------------------------------------
 check "--shard slurm: the frame SLURM_ARRAY_TASK_ID only" bash -c "SLURM_ARRAY_TASK_ID=5 '$BIN' rasterize 'f_{:04}.bgeo' -r 0.01 -o 'v_{:04}.vdb' --shard slurm -q && [ \"\$(ls v_*)\" = v_0005.vdb ]"
+# --- mesh (and post, the same loop): a corrupt .vdb passed over, finished frames skipped -------
+head -c 200 v_0005.vdb >v_0006.vdb
+out=$("$BIN" mesh 'v_{:04}.vdb' -o 'w_{:04}.ply' --keep-going 2>w.err)
+rc=$?
+check "mesh --keep-going: exit 1 (got $rc), the good frame meshed, the bad one listed" bash -c "[ $rc -eq 1 ] && [ -s w_0005.ply ] && [ ! -e w_0006.ply ] && grep -q '^  v_0006.vdb$' w.err"
+check "mesh --keep-going: the summary" grep -q "mesh 2 frames: 1 done, 0 skipped, 1 failed" <<<"$out"
+out=$("$BIN" mesh 'v_{:04}.vdb' -o 'w_{:04}.ply' --keep-going --skip-existing 2>/dev/null)
+check "mesh --skip-existing: the summary" grep -q "mesh 2 frames: 0 done, 1 skipped, 1 failed" <<<"$out"
+
 expect_error "--shard slurm outside an array job" "SLURM_ARRAY_TASK_ID is not set" \
     env -u SLURM_ARRAY_TASK_ID "$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'x_{:04}.ply' --shard slurm
 expect_error "--shard slurm: a frame the sequence lacks" "frame 9 (SLURM_ARRAY_TASK_ID) is not in the sequence" \

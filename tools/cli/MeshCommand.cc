@@ -39,6 +39,7 @@ void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o, Makes makes = Makes::Me
         ->required();
     cmd->add_option("--frames", o.frames, "frame range A-B for a pattern");
     addRunOptions(cmd, o.pipeline, makes);
+    addSequenceOptions(cmd, o.sequence);
 }
 
 std::vector<FrameJob> planMeshJobs(const MeshOptions& o)
@@ -98,21 +99,26 @@ int runMeshFrames(const MeshOptions& o, const char* name, const MakeMesh& make)
     refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
     Context ctx;
     const auto threadLimit = po.setUp(ctx);
-    Progress bar(jobs.size(), name, po.quiet);
+    const std::vector<size_t> picked = shardOf(jobs, o.sequence.shard);
+    SequenceRun run(o.sequence, po.quiet);
+    Progress bar(picked.size(), name, po.quiet);
     Report report(po);
-    for (size_t i = 0; i < jobs.size(); ++i)
-        forFile(jobs[i].input, [&] {
-            bar.update(i, jobs[i].input);
+    for (size_t k = 0; k < picked.size(); ++k) {
+        const FrameJob& job = jobs[picked[k]];
+        if (run.skip({job.output})) continue;
+        run.frame(job.input, [&] {
+            bar.update(k, job.input);
             ctx.timing().clear();
             std::vector<std::pair<std::string, double>> counts;
-            const TriangleMesh mesh = make(jobs[i].input, ctx, counts);
+            const TriangleMesh mesh = make(job.input, ctx, counts);
             io::OutputGroup outputs;
-            writeAndReport(o, ctx, mesh, jobs[i], bar.enabled(), report, outputs, counts);
+            writeAndReport(o, ctx, mesh, job, bar.enabled(), report, outputs, counts);
             stopIfInterrupted(ctx);
         });
+    }
     bar.finish();
     report.finish();
-    return 0;
+    return run.finish(name, picked.size());
 }
 
 /// --stats counts of post-processing: the triangles it took and left after decimation.
@@ -298,7 +304,6 @@ Runner addReconstructCommand(CLI::App& app)
         ->capture_default_str()
         ->check(CLI::Range(1e-6, 0.5));
     addPostOptions(cmd, o->pipeline);
-    addSequenceOptions(cmd, o->sequence);
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"

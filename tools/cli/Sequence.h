@@ -1,7 +1,7 @@
 // Sequence.h - running a frame sequence the way a farm needs it: a share of the frames per task
 // (--shard), finished frames left alone (--skip-existing), a bad frame reported and passed over
-// (--keep-going), and one summary line at the end. Used by the commands that read particle
-// frames (rasterize, reconstruct) and by mesh.
+// (--keep-going), and one summary line at the end. Used by rasterize, reconstruct, mesh and
+// post.
 #pragma once
 
 #include "Frames.h"
