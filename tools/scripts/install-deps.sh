@@ -13,6 +13,8 @@ PACKAGES=(
     python3 python3-numpy python3-openvdb
     # CI's format check (tools/scripts/check-format.sh) against .clang-format.
     clang-format
+    # The farm test (tests/integration/slurm_test.sh) starts a single-node Slurm of its own.
+    slurm-wlm munge
 )
 
 missing=()
