@@ -21,7 +21,7 @@ T=$(mktemp -d /tmp/fluidsurf_slurm_XXXXXX)
 chmod 755 "$T"
 daemons=()
 stop() {
-    [ -n "${SLURM_CONF:-}" ] && scancel --quiet --user=root >/dev/null 2>&1
+    [ -n "${SLURM_CONF:-}" ] && timeout 5 scancel --quiet --user=root >/dev/null 2>&1
     for pid in "${daemons[@]}"; do kill "$pid" 2>/dev/null; done
     [ -f "$T/munged.pid" ] && kill "$(cat "$T/munged.pid")" 2>/dev/null
     sleep 0.5
@@ -29,6 +29,7 @@ stop() {
     rm -rf "$T"
 }
 trap stop EXIT
+trap 'exit 1' INT TERM # so that a timeout's SIGTERM still stops the daemons
 source "$(dirname "$0")/checks.sh"
 
 # --- the cluster -----------------------------------------------------------------------------
@@ -46,7 +47,7 @@ munged --force --key-file="$T/munge.key" --socket="$T/munge/socket" --log-file="
     skip "munged does not start: $(tail -1 "$T/munged.err")"
 cat >"$T/slurm.conf" <<EOF
 ClusterName=fluidsurftest
-SlurmctldHost=$host
+SlurmctldHost=$host(127.0.0.1)
 SlurmUser=root
 SlurmdUser=root
 SlurmctldPort=$ctldPort
@@ -70,7 +71,7 @@ SelectType=select/cons_tres
 SelectTypeParameters=CR_Core
 ReturnToService=2
 MpiDefault=none
-NodeName=$host CPUs=$(nproc) RealMemory=1000 State=UNKNOWN
+NodeName=$host NodeAddr=127.0.0.1 CPUs=$(nproc) RealMemory=1000 State=UNKNOWN
 PartitionName=test Nodes=$host Default=YES MaxTime=INFINITE State=UP
 EOF
 export SLURM_CONF=$T/slurm.conf
@@ -78,13 +79,13 @@ slurmctld -D -f "$SLURM_CONF" >"$T/slurmctld.out" 2>&1 &
 daemons+=($!)
 slurmd -D -f "$SLURM_CONF" -N "$host" >"$T/slurmd.out" 2>&1 &
 daemons+=($!)
-for _ in $(seq 60); do
-    [ "$(sinfo -h -N -o %t 2>/dev/null)" = idle ] && break
-    sleep 0.5
-done
-[ "$(sinfo -h -N -o %t 2>/dev/null)" = idle ] ||
-    skip "the node is not idle after 30 s: $(tail -1 "$T/slurmctld.log" "$T/slurmd.log" "$T/slurmd.out" 2>/dev/null | tr '\n' ' ')"
-echo "slurm: $(sinfo -V), node $host idle"
+# (Addresses are given, not looked up: a fresh root may not resolve its own host name.)
+state() { timeout 5 sinfo -h -N -o %t 2>/dev/null; }
+deadline=$((SECONDS + 30))
+while [ "$(state)" != idle ] && [ $SECONDS -lt $deadline ]; do sleep 0.5; done
+[ "$(state)" = idle ] ||
+    skip "the node is not idle after 30 s: $(tail -qn1 "$T/slurmctld.log" "$T/slurmd.log" 2>/dev/null | tr '\n' ' ')"
+echo "slurm: $(timeout 5 sinfo -V), node $host idle"
 
 # --- the frames and the job array ------------------------------------------------------------
 for f in $(seq 12); do
@@ -96,13 +97,13 @@ cat >"$T/job.sh" <<EOF
 exec "$BIN" reconstruct "$T/f_{:04}.bgeo" -r 0.01 -o "$T/m_{:04}.ply" --raw \\
     --shard slurm --skip-existing --keep-going -j 1
 EOF
-submit() { # submit LOGPREFIX: sbatch --wait of the array, at most 180 s; prints its exit code
-    (cd "$T" && timeout 180 sbatch --wait --quiet --array=1-12 -o "$T/$1_%a.log" "$T/job.sh" \
+submit() { # submit LOGPREFIX: sbatch --wait of the array, at most 150 s; prints its exit code
+    (cd "$T" && timeout 150 sbatch --wait --quiet --array=1-12 -o "$T/$1_%a.log" "$T/job.sh" \
         >"$T/$1.sbatch" 2>&1)
     echo $?
 }
 rc=$(submit run)
-check "sbatch --wait returned within 180 s (exit $rc)" test "$rc" -ne 124
+check "sbatch --wait returned within 150 s (exit $rc)" test "$rc" -ne 124
 check "sbatch reports the failed task (exit 1, got $rc)" test "$rc" -eq 1
 for f in 1 2 3 4 5 6 8 9 10 11 12; do
     m=$T/m_$(printf %04d $f).ply
