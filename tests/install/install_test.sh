@@ -22,4 +22,19 @@ out=$("$T/build/downstream" "$T/p.ply")
 echo "$out"
 grep -q "downstream read 1000 particles" <<<"$out"
 grep -q "watertight" <<<"$out"
-echo "install: 1 passed, 0 failed"
+# The Python package, where it was built: installed under the prefix's site-packages, importable
+# with nothing else than that folder on PYTHONPATH.
+passed=1
+if [ -d "$BUILD/python" ]; then
+    site=$(find "$T/prefix" -name 'fluidsurf*.so' -printf '%h\n' | head -1)
+    case "$site" in */lib/python3.*/dist-packages) ;; *) echo "python package at '$site'"; exit 1 ;; esac
+    PYTHONPATH=$site /usr/bin/python3 -c '
+import fluidsurf
+p = fluidsurf.generate("ball", count=1000, radius=0.01)["positions"]
+m = fluidsurf.reconstruct(p, 0.01)
+assert fluidsurf.__file__.startswith("'"$site"'"), fluidsurf.__file__
+assert m.check()["watertight"], m.check()
+print("installed python package: %d triangles, watertight" % len(m.triangles))'
+    passed=2
+fi
+echo "install: $passed passed, 0 failed"

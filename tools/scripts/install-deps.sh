@@ -11,6 +11,8 @@ PACKAGES=(
     # The CLI end-to-end tests: /usr/bin/python3 checks OBJ files and memory figures
     # independently, numpy re-reads the .npy round trip, pyopenvdb opens the written level set.
     python3 python3-numpy python3-openvdb
+    # The Python package (tools/python, pybind11) and its tests (tests/python, pytest).
+    python3-dev python3-pybind11 python3-pytest
     # CI's format check (tools/scripts/check-format.sh) against .clang-format.
     clang-format
     # The farm test (tests/integration/slurm_test.sh) starts a single-node Slurm of its own.
