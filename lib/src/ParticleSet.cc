@@ -45,31 +45,39 @@ Attribute* ParticleSet::find(const std::string& name)
     return nullptr;
 }
 
-const Attribute* ParticleSet::find(AttributeRole role) const
+namespace {
+const char* const* aliasesOf(AttributeRole role)
 {
     static const char* const kRadius[] = {"pscale", "radius", "Radius", nullptr};
     static const char* const kVelocity[] = {"v", "velocity", "vel", "Vel", "Velocity", nullptr};
     static const char* const kDensity[] = {"density", "rho", "Rhop", "Density", nullptr};
     static const char* const kId[] = {"id", "Idp", "index", "ID", "Id", nullptr};
-    const char* const* aliases = kRadius;
-    int components = 1;
-    bool mustBeFloat = true;
     switch (role) {
     case AttributeRole::Radius:
-        break;
+        return kRadius;
     case AttributeRole::Velocity:
-        aliases = kVelocity;
-        components = 3;
-        break;
+        return kVelocity;
     case AttributeRole::Density:
-        aliases = kDensity;
-        break;
+        return kDensity;
     case AttributeRole::Id:
-        aliases = kId;
-        mustBeFloat = false;
-        break; // some writers use floats
+        return kId;
     }
-    for (const char* const* alias = aliases; *alias; ++alias) {
+    return kRadius;
+}
+} // namespace
+
+bool isRoleAlias(AttributeRole role, const std::string& name)
+{
+    for (const char* const* alias = aliasesOf(role); *alias; ++alias)
+        if (name == *alias) return true;
+    return false;
+}
+
+const Attribute* ParticleSet::find(AttributeRole role) const
+{
+    const int components = role == AttributeRole::Velocity ? 3 : 1;
+    const bool mustBeFloat = role != AttributeRole::Id; // some writers store ids as floats
+    for (const char* const* alias = aliasesOf(role); *alias; ++alias) {
         const Attribute* a = find(std::string(*alias));
         if (a && a->components == components && (!mustBeFloat || a->type == AttributeType::Float))
             return a;

@@ -19,9 +19,10 @@ def run_cli(cli, *args):
     subprocess.run([cli, *map(str, args)], check=True, capture_output=True, text=True)
 
 
-def read_ply(path):
+def read_ply(path, properties=False):
     """Vertices (V, 3) float32 and triangles (T, 3) of a binary little-endian PLY, read with numpy
-    alone (independent of the library's reader)."""
+    alone (independent of the library's reader); with properties=True also {name: (V,) array}
+    of every vertex property."""
     with open(path, "rb") as f:
         data = f.read()
     end = data.index(b"end_header\n") + len(b"end_header\n")
@@ -34,16 +35,18 @@ def read_ply(path):
             current = words[1]
             counts[current] = int(words[2])
         elif words[0] == "property" and words[1] != "list":
-            props[current].append(words[1])
+            props[current].append((words[1], words[2]))
         elif words[0] == "property":
             assert words[2:4] == ["uchar", "int"], words
-    types = {"float": "<f4", "float32": "<f4"}
-    vdtype = np.dtype([(f"p{i}", types[t]) for i, t in enumerate(props["vertex"])])
+    types = {"float": "<f4", "int": "<i4"}
+    vdtype = np.dtype([(name, types[t]) for t, name in props["vertex"]])
     v = np.frombuffer(data, vdtype, counts["vertex"], end)
-    xyz = np.stack([v["p0"], v["p1"], v["p2"]], axis=1)
+    xyz = np.stack([v["x"], v["y"], v["z"]], axis=1)
     fdtype = np.dtype([("n", "u1"), ("i", "<i4", 3)])
     faces = np.frombuffer(data, fdtype, counts["face"], end + vdtype.itemsize * counts["vertex"])
     assert (faces["n"] == 3).all()
+    if properties:
+        return xyz, faces["i"].copy(), {name: v[name].copy() for _, name in props["vertex"]}
     return xyz, faces["i"].copy()
 
 

@@ -56,12 +56,13 @@ std::vector<FrameJob> planMeshJobs(const MeshOptions& o)
 void writeAndReport(const MeshOptions& o, Context& ctx, const TriangleMesh& mesh,
                     const FrameJob& job, bool bar, Report& report, io::OutputGroup& outputs,
                     std::vector<std::pair<std::string, double>> counts,
-                    const RasterizeStats* field = nullptr)
+                    const RasterizeStats* field = nullptr,
+                    const std::vector<Attribute>& attributes = {})
 {
     const PipelineOptions& po = o.pipeline;
     {
         const auto t = ctx.scope("write mesh");
-        io::writeMesh(mesh, outputs.add(job.output));
+        io::writeMesh(mesh, outputs.add(job.output), attributes);
         stopIfInterrupted(ctx); // a stop here keeps the frame's old files, all of them
         outputs.commit();
     }
@@ -298,6 +299,12 @@ Runner addReconstructCommand(CLI::App& app)
                     "drop (left out of the mesh)")
         ->capture_default_str()
         ->check(CLI::IsMember({"spheres", "drop"}));
+    cmd->add_option("--attributes", o->pipeline.params.attributes,
+                    "particle attributes to carry onto the mesh's vertices, e.g. v,density,id "
+                    "(a linear fit over the particles within R: a linear field such as a "
+                    "rotation comes out exact; integers from the nearest particle); written as "
+                    "PLY vertex properties (v as vx vy vz) or VTK point data, not into OBJ")
+        ->delimiter(',');
     cmd->add_option("--sphere-deviation", o->pipeline.params.post.sphereDeviation,
                     "how far the spheres' faces may dip inside their radius, as a fraction of it; "
                     "picks the icosphere level (0.01: 1,280 triangles, 0.05: 320)")
@@ -312,6 +319,7 @@ Runner addReconstructCommand(CLI::App& app)
         "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'obj/f_{:04}.obj' --frames 1-100\n"
         "  fluidsurf reconstruct frame.bgeo -o frame.obj -v --stats frame.json   (r estimated)\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.ply --adaptive --vdb frame.vdb\n"
+        "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.ply --attributes v,density,id\n"
         "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'ply/f_{:04}.ply' --shard 3/8 \\\n"
         "      --skip-existing --keep-going     (the 3rd of 8 tasks; re-runs skip finished "
         "frames)\n"
@@ -328,6 +336,14 @@ Runner addReconstructCommand(CLI::App& app)
         outputs.insert(outputs.end(), vdbOutputs.begin(), vdbOutputs.end());
         refuseOverwritingInputs(inputsOf(jobs), outputs);
         ReconstructParams params = po.resolved();
+        if (!params.attributes.empty() && !jobs.empty() &&
+            io::meshFormatFromPath(jobs[0].output) == io::MeshFormat::Obj) {
+            std::fprintf(stderr,
+                         "fluidsurf: warning: OBJ cannot hold vertex attributes: --attributes "
+                         "is not written to %s (write .ply or .vtk)\n",
+                         jobs[0].output.c_str());
+            params.attributes.clear();
+        }
         Context ctx;
         const auto threadLimit = po.setUp(ctx);
         io::ReadOptions ro;
@@ -376,7 +392,7 @@ Runner addReconstructCommand(CLI::App& app)
                 addPostCounts(res.post, counts);
                 counts.push_back({"isolated_spheres", double(res.isolatedSpheres)});
                 writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
-                               &res.field);
+                               &res.field, res.vertexAttributes);
                 stopIfInterrupted(ctx);
             });
         }

@@ -93,13 +93,23 @@ ParticleSet particlesFrom(py::handle positions, py::handle radii, py::handle att
     ParticleSet ps;
     ps.positions = pointsFrom(positions, "positions");
     const auto n = py::ssize_t(ps.size());
+    ps.attributes = attributesFrom(attributes, ps.size());
     if (!radii.is_none()) {
         const auto r = floats(radii, "radii", n, 0);
         ps.addFloat("pscale", 1, std::vector<float>(r.data(), r.data() + n));
     }
-    if (attributes.is_none()) return ps;
+    return ps;
+}
+
+std::vector<Attribute> attributesFrom(py::handle attributes, size_t rows)
+{
+    std::vector<Attribute> out;
+    if (attributes.is_none()) return out;
     if (!py::isinstance<py::dict>(attributes))
         throw py::type_error("attributes must be a dict {name: array}");
+    const auto n = py::ssize_t(rows);
+    ParticleSet ps; // for its checks of names and sizes
+    ps.positions.resize(rows);
     for (auto item : py::reinterpret_borrow<py::dict>(attributes)) {
         const std::string name = py::str(item.first);
         const std::string what = "attributes['" + name + "']";
@@ -120,18 +130,14 @@ ParticleSet particlesFrom(py::handle positions, py::handle radii, py::handle att
                                  std::string(py::str(a.dtype())) + ")");
         }
     }
-    return ps;
+    return std::move(ps.attributes);
 }
 
-py::dict particlesToDict(const ParticleSet& ps)
+py::dict attributesToDict(const std::vector<Attribute>& attributes, size_t rows)
 {
     py::dict d;
-    const auto n = py::ssize_t(ps.size());
-    py::array_t<float> p({n, py::ssize_t(3)});
-    if (n) std::memcpy(p.mutable_data(), ps.positions.data(), size_t(n) * sizeof(Vec3f));
-    d["positions"] = p;
-    for (const Attribute& a : ps.attributes) {
-        std::vector<py::ssize_t> shape{n};
+    for (const Attribute& a : attributes) {
+        std::vector<py::ssize_t> shape{py::ssize_t(rows)};
         if (a.components > 1) shape.push_back(a.components);
         if (a.type == AttributeType::Float) {
             py::array_t<float> v(shape);
@@ -145,6 +151,18 @@ py::dict particlesToDict(const ParticleSet& ps)
             d[a.name.c_str()] = v;
         }
     }
+    return d;
+}
+
+py::dict particlesToDict(const ParticleSet& ps)
+{
+    py::dict d;
+    const auto n = py::ssize_t(ps.size());
+    py::array_t<float> p({n, py::ssize_t(3)});
+    if (n) std::memcpy(p.mutable_data(), ps.positions.data(), size_t(n) * sizeof(Vec3f));
+    d["positions"] = p;
+    for (auto item : attributesToDict(ps.attributes, ps.size()))
+        d[item.first] = item.second;
     return d;
 }
 

@@ -23,6 +23,11 @@ std::vector<Vec3f> pointsFrom(pybind11::handle array, const char* name);
 ParticleSet particlesFrom(pybind11::handle positions, pybind11::handle radii,
                           pybind11::handle attributes);
 
+/// Attributes from {name: (rows,) or (rows, k) array} (None: none), checked as above.
+std::vector<Attribute> attributesFrom(pybind11::handle attributes, size_t rows);
+/// {name: (rows,) or (rows, k) array} (float32 or int64), copies.
+pybind11::dict attributesToDict(const std::vector<Attribute>& attributes, size_t rows);
+
 /// {"positions": (N, 3) float32, attribute name: (N,) or (N, k) array, ...}
 pybind11::dict particlesToDict(const ParticleSet& particles);
 

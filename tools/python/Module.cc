@@ -67,16 +67,19 @@ const char* kParticlesDoc =
     "(info['radius_source'] says which). radii: optional (N,) per-particle radii (as pscale). ";
 
 PyMesh reconstructArrays(py::handle positions, double radius, py::handle radii,
-                         const py::kwargs& kwargs)
+                         py::handle attributes, const py::kwargs& kwargs)
 {
     Settings s = settingsFrom(kwargs, kAll);
     s.params.radius = checkedRadius(radius);
-    const ParticleSet ps = particlesFrom(positions, radii, py::none());
+    const ParticleSet ps = particlesFrom(positions, radii, attributes);
+    if (!attributes.is_none())
+        for (auto item : py::reinterpret_borrow<py::dict>(attributes))
+            s.params.attributes.push_back(py::str(item.first));
     Context ctx;
     setUp(ctx, s);
     ReconstructResult res = compute(s, [&] { return reconstruct(ps, s.params, ctx); });
     ctx.timing().finish();
-    PyMesh out{std::move(res.mesh), py::dict()};
+    PyMesh out{std::move(res.mesh), py::dict(), std::move(res.vertexAttributes)};
     addFieldInfo(out.info, res.radius, res.field, res.isolatedParticles);
     out.info["isolated_spheres"] = res.isolatedSpheres;
     out.info["timing"] = ctx.timing().format();
@@ -196,9 +199,13 @@ PYBIND11_MODULE(fluidsurf, m)
     });
 
     m.def("reconstruct", &reconstructArrays, py::arg("positions"), py::arg("radius") = 0.0,
-          py::kw_only(), py::arg("radii") = py::none(),
+          py::kw_only(), py::arg("radii") = py::none(), py::arg("attributes") = py::none(),
           (std::string("Particles to a watertight triangle mesh, as `fluidsurf reconstruct`. ") +
-           kParticlesDoc + "Parameters (lengths in r, as the CLI's options): " +
+           kParticlesDoc +
+           "attributes: {name: (N,) or (N, k) array} carried onto the mesh's vertices "
+           "(Mesh.attributes): floats by a linear fit over the particles within R (a linear "
+           "field comes out exact), integers from the nearest particle. Parameters (lengths in r, "
+           "as the CLI's options): " +
            describeParams(kAll) + ". Returns a Mesh.")
               .c_str());
     m.def("rasterize", &rasterizeArrays, py::arg("positions"), py::arg("radius") = 0.0,

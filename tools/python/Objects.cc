@@ -43,10 +43,14 @@ void bindMesh(py::module_& m)
                        "counter-clockwise seen from outside, normals (V, 3) float32 or None. The "
                        "arrays are views of the mesh's own memory (writable, no copy); info holds "
                        "what the call that made it learned.")
-        .def(py::init([](py::handle vertices, py::handle triangles, py::handle normals) {
-                 return PyMesh{meshFrom(vertices, triangles, normals), py::dict()};
+        .def(py::init([](py::handle vertices, py::handle triangles, py::handle normals,
+                         py::handle attributes) {
+                 PyMesh me{meshFrom(vertices, triangles, normals), py::dict(), {}};
+                 me.attributes = attributesFrom(attributes, me.mesh.points.size());
+                 return me;
              }),
-             py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none())
+             py::arg("vertices"), py::arg("triangles"), py::arg("normals") = py::none(),
+             py::arg("attributes") = py::none())
         .def_property_readonly(
             "vertices",
             [](py::object self) { return view(self.cast<PyMesh&>().mesh.points, self); })
@@ -60,6 +64,11 @@ void bindMesh(py::module_& m)
                                    return view(me.mesh.normals, self);
                                })
         .def_readonly("info", &PyMesh::info)
+        .def_property_readonly(
+            "attributes",
+            [](const PyMesh& me) { return attributesToDict(me.attributes, me.mesh.points.size()); },
+            "{name: (V,) or (V, k) array} of vertex attributes (copies), e.g. the particles' "
+            "velocity carried onto the vertices by reconstruct(..., attributes=...).")
         .def(
             "check",
             [](const PyMesh& me) {
@@ -75,10 +84,19 @@ void bindMesh(py::module_& m)
         .def(
             "write",
             [](const PyMesh& me, const std::string& path) {
+                const bool obj = io::meshFormatFromPath(path) == io::MeshFormat::Obj;
+                if (obj && !me.attributes.empty())
+                    PyErr_WarnEx(PyExc_UserWarning,
+                                 ("OBJ cannot hold vertex attributes: they are not written to " +
+                                  path + " (write .ply or .vtk)")
+                                     .c_str(),
+                                 1);
                 py::gil_scoped_release noGil;
-                io::writeMesh(me.mesh, path);
+                io::writeMesh(me.mesh, path, obj ? std::vector<Attribute>() : me.attributes);
             },
-            py::arg("path"), "Write .obj, .ply (binary) or .vtk, atomically.")
+            py::arg("path"),
+            "Write .obj, .ply (binary) or .vtk, atomically; vertex attributes as PLY properties "
+            "(v as vx vy vz) or VTK point data (OBJ cannot hold them: a warning says so).")
         .def("__repr__", [](const PyMesh& me) {
             return "<fluidsurf.Mesh " + std::to_string(me.mesh.points.size()) + " vertices, " +
                    std::to_string(me.mesh.triangles.size()) + " triangles>";
@@ -87,7 +105,7 @@ void bindMesh(py::module_& m)
     m.def(
         "read_mesh",
         [](const std::string& path) {
-            return PyMesh{io::readMesh(path), py::dict()};
+            return PyMesh{io::readMesh(path), py::dict(), {}};
         },
         py::arg("path"), "Read an .obj or .ply mesh (polygons fanned into triangles).");
 
@@ -96,6 +114,12 @@ void bindMesh(py::module_& m)
         [](const PyMesh& in, double voxelSize, const py::kwargs& kwargs) {
             Settings s = settingsFrom(kwargs, kPost | kRun);
             s.params.post.voxelSize = voxelSize;
+            if (!in.attributes.empty())
+                PyErr_WarnEx(PyExc_UserWarning,
+                             "post_process does not carry vertex attributes: pass the particles' "
+                             "attributes to reconstruct, which evaluates them at the final "
+                             "vertices",
+                             1);
             Context ctx;
             setUp(ctx, s);
             PostProcessStats stats;

@@ -63,5 +63,7 @@ public:
 };
 
 const char* roleName(AttributeRole role);
+/// Whether name is one of the aliases by which ParticleSet::find(role) looks ("Rhop": density).
+bool isRoleAlias(AttributeRole role, const std::string& name);
 
 } // namespace fluidsurf

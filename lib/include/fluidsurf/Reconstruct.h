@@ -2,7 +2,8 @@
 //
 //   particles -> radius choice -> rasterizeParticles (neighbors, classify, narrow band, field,
 //   level set) -> meshLevelSet (marching cubes) -> post-processing (ch. 5: decimation,
-//   smoothing, Loop subdivision, isolated particles as spheres) -> result
+//   smoothing, Loop subdivision, isolated particles as spheres) -> particle attributes at the
+//   vertices (TransferAttributes.h) -> result
 //
 // With field.adaptive, rasterizeParticles builds the 3-level grid of ch. 6 and
 // meshAdaptiveGrid (AdaptiveGrid.h) meshes it instead of meshLevelSet.
@@ -47,6 +48,9 @@ struct ReconstructParams
     Params field = Params::fromRadius(1);
     MeshParams mesh;
     PostProcessParams post;
+    /// Particle attributes to carry onto the mesh's vertices (TransferAttributes.h: "v",
+    /// "density", "id", or an alias such as "velocity"), into ReconstructResult::vertexAttributes.
+    std::vector<std::string> attributes;
 
     /// The DESIGN.md defaults for particle radius r.
     static ReconstructParams fromRadius(double r);
@@ -80,6 +84,8 @@ struct ReconstructResult
     AdaptiveGrid adaptiveGrid;
     AdaptiveMeshStats adaptiveMesh;
     TriangleMesh mesh;
+    /// ReconstructParams::attributes at mesh's vertices, in that order (one value per vertex).
+    std::vector<Attribute> vertexAttributes;
     std::vector<uint32_t> isolatedParticles; ///< input indices left out of the surface
     /// Of them, appended to mesh as spheres (IsolatedMode::Spheres): all but those too far from
     /// the origin for float32 to place a sphere's vertices (beyond ~8,000 radii).

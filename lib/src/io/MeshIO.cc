@@ -102,23 +102,51 @@ std::string encodeObj(const TriangleMesh& m)
     return s;
 }
 
-std::string encodePlyMesh(const TriangleMesh& m)
+/// The names a vertex attribute's components get as PLY properties (and VTK arrays keep whole):
+/// "density"; a 3-vector "v" as vx vy vz, like the normals' nx ny nz; other vectors name0 ...
+std::vector<std::string> componentNames(const Attribute& a)
+{
+    if (a.components == 1) return {a.name};
+    std::vector<std::string> names;
+    for (int c = 0; c < a.components; ++c)
+        names.push_back(a.name +
+                        (a.components == 3 ? std::string(1, "xyz"[c]) : std::to_string(c)));
+    return names;
+}
+
+std::string encodePlyMesh(const TriangleMesh& m, const std::vector<Attribute>& attributes)
 {
     const bool withNormals = !m.normals.empty();
     std::string s = "ply\nformat binary_little_endian 1.0\ncomment written by fluidsurf\n";
     s += "element vertex " + std::to_string(m.points.size()) + "\n";
     s += "property float x\nproperty float y\nproperty float z\n";
     if (withNormals) s += "property float nx\nproperty float ny\nproperty float nz\n";
+    size_t vstride = withNormals ? 24 : 12;
+    for (const Attribute& a : attributes) {
+        for (const std::string& name : componentNames(a))
+            s += std::string("property ") + (a.type == AttributeType::Float ? "float " : "int ") +
+                 name + "\n";
+        vstride += 4 * size_t(a.components);
+    }
     s += "element face " + std::to_string(m.triangles.size()) + "\n";
     s += "property list uchar int vertex_indices\nend_header\n";
     const size_t head = s.size();
-    const size_t vstride = withNormals ? 24 : 12;
     s.resize(head + m.points.size() * vstride + m.triangles.size() * 13);
     char* p = &s[head];
     for (size_t i = 0; i < m.points.size(); ++i) {
         std::memcpy(p, &m.points[i], 12);
-        if (withNormals) std::memcpy(p + 12, &m.normals[i], 12);
-        p += vstride;
+        p += 12;
+        if (withNormals) std::memcpy(p, &m.normals[i], 12), p += 12;
+        for (const Attribute& a : attributes)
+            for (size_t c = 0; c < size_t(a.components); ++c, p += 4) {
+                const size_t k = i * size_t(a.components) + c;
+                if (a.type == AttributeType::Float) {
+                    std::memcpy(p, &a.floats[k], 4);
+                } else {
+                    const int32_t v = int32_t(a.ints[k]); // range checked by writeMesh
+                    std::memcpy(p, &v, 4);
+                }
+            }
     }
     for (const auto& t : m.triangles) {
         *p++ = 3;
@@ -138,7 +166,7 @@ void appendBE(std::string& s, const void* v, size_t n)
         s += c[n - 1 - i];
 }
 
-std::string encodeVtkMesh(const TriangleMesh& m)
+std::string encodeVtkMesh(const TriangleMesh& m, const std::vector<Attribute>& attributes)
 {
     std::string s = "# vtk DataFile Version 4.2\nfluidsurf mesh\nBINARY\nDATASET POLYDATA\n";
     s += "POINTS " + std::to_string(m.points.size()) + " float\n";
@@ -156,10 +184,27 @@ std::string encodeVtkMesh(const TriangleMesh& m)
         }
     }
     s += "\n";
+    if (!m.normals.empty() || !attributes.empty())
+        s += "POINT_DATA " + std::to_string(m.points.size()) + "\n";
     if (!m.normals.empty()) {
-        s += "POINT_DATA " + std::to_string(m.points.size()) + "\nNORMALS normals float\n";
+        s += "NORMALS normals float\n";
         for (const Vec3f& n : m.normals)
             appendBE(s, &n.x, 4), appendBE(s, &n.y, 4), appendBE(s, &n.z, 4);
+        s += "\n";
+    }
+    // every attribute whole, as a field array (any component count; ParaView shows them)
+    if (!attributes.empty()) s += "FIELD FieldData " + std::to_string(attributes.size()) + "\n";
+    for (const Attribute& a : attributes) {
+        s += a.name + " " + std::to_string(a.components) + " " + std::to_string(m.points.size()) +
+             (a.type == AttributeType::Float ? " float\n" : " int\n");
+        for (size_t k = 0; k < a.size(); ++k) {
+            if (a.type == AttributeType::Float) {
+                appendBE(s, &a.floats[k], 4);
+            } else {
+                const int32_t v = int32_t(a.ints[k]);
+                appendBE(s, &v, 4);
+            }
+        }
         s += "\n";
     }
     return s;
@@ -168,6 +213,12 @@ std::string encodeVtkMesh(const TriangleMesh& m)
 } // namespace
 
 void writeMesh(const TriangleMesh& mesh, const std::string& path)
+{
+    writeMesh(mesh, path, {});
+}
+
+void writeMesh(const TriangleMesh& mesh, const std::string& path,
+               const std::vector<Attribute>& attributes)
 {
     const MeshFormat format = meshFormatFromPath(path);
     if (format == MeshFormat::Unknown)
@@ -182,9 +233,23 @@ void writeMesh(const TriangleMesh& mesh, const std::string& path)
             if (v >= mesh.points.size())
                 throw OutputError(path + ": triangle refers to vertex " + std::to_string(v) +
                                   " of " + std::to_string(mesh.points.size()));
+    if (!attributes.empty() && format == MeshFormat::Obj)
+        throw OutputError(path + ": OBJ cannot hold vertex attributes (write .ply or .vtk)");
+    for (const Attribute& a : attributes) {
+        if (a.components < 1 || a.size() != mesh.points.size() * size_t(a.components))
+            throw OutputError(path + ": attribute '" + a.name + "' has " +
+                              std::to_string(a.size()) + " values for " +
+                              std::to_string(mesh.points.size()) + " vertices");
+        if (a.name.empty() || a.name.find_first_of(" \t\r\n") != std::string::npos)
+            throw OutputError(path + ": attribute name '" + a.name + "' is empty or has spaces");
+        for (int64_t v : a.ints)
+            if (v < INT32_MIN || v > INT32_MAX)
+                throw OutputError(path + ": attribute '" + a.name + "' has the value " +
+                                  std::to_string(v) + ", beyond 32-bit integers");
+    }
     const std::string bytes = format == MeshFormat::Obj   ? encodeObj(mesh)
-                              : format == MeshFormat::Ply ? encodePlyMesh(mesh)
-                                                          : encodeVtkMesh(mesh);
+                              : format == MeshFormat::Ply ? encodePlyMesh(mesh, attributes)
+                                                          : encodeVtkMesh(mesh, attributes);
     writeFileAtomic(path, bytes.data(), bytes.size());
 }
 

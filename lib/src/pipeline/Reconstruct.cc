@@ -3,6 +3,7 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/Reconstruct.h>
 #include <fluidsurf/SpacingEstimate.h>
+#include <fluidsurf/TransferAttributes.h>
 
 #include "post/IsolatedSpheres.h"
 
@@ -103,6 +104,7 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
                               Context& ctx, const std::string& sourceName)
 {
     validate(params.post);
+    checkAttributeNames(particles, params.attributes); // before the work, not after it
     ReconstructResult res;
     res.radius = chooseRadius(particles, params.radius, params.field.perParticleRadii);
     RasterizeResult field =
@@ -120,18 +122,26 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
         res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing);
     }
     ctx.throwIfCancelled();
-    const auto postScope = ctx.scope("post"); // always there: timing trees keep one shape
-    PostProcessParams post = params.post;
-    // The finest level's voxel (the adaptive grid's level 3).
-    if (!(post.voxelSize > 0))
-        post.voxelSize =
-            (res.adaptiveGrid.empty() ? res.levelSet : res.adaptiveGrid.level3)->voxelSize()[0];
-    res.mesh = postProcessMesh(std::move(res.mesh), post, ctx, &res.post);
-    if (params.post.isolated == IsolatedMode::Spheres && !res.isolatedParticles.empty()) {
-        const auto t = ctx.scope("isolated spheres");
-        res.isolatedSpheres = appendIsolatedSpheres(res.mesh, particles, res.isolatedParticles,
-                                                    params, res.radius.radius);
+    {
+        const auto postScope = ctx.scope("post"); // always there: timing trees keep one shape
+        PostProcessParams post = params.post;
+        // The finest level's voxel (the adaptive grid's level 3).
+        if (!(post.voxelSize > 0))
+            post.voxelSize =
+                (res.adaptiveGrid.empty() ? res.levelSet : res.adaptiveGrid.level3)->voxelSize()[0];
+        res.mesh = postProcessMesh(std::move(res.mesh), post, ctx, &res.post);
+        if (params.post.isolated == IsolatedMode::Spheres && !res.isolatedParticles.empty()) {
+            const auto t = ctx.scope("isolated spheres");
+            res.isolatedSpheres = appendIsolatedSpheres(res.mesh, particles, res.isolatedParticles,
+                                                        params, res.radius.radius);
+        }
     }
+    // At the final vertices: the attributes are a function of position (TransferAttributes.h),
+    // so evaluating them after decimation and subdivision loses nothing to those steps.
+    if (!params.attributes.empty())
+        res.vertexAttributes =
+            transferAttributes(particles, params.attributes, res.mesh.points,
+                               params.fieldParams(res.radius.radius).influenceRadius, ctx);
     return res;
 }
 

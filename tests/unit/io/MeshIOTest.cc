@@ -91,3 +91,46 @@ TEST(MeshIO, RejectsBadIndicesAndUnknownExtensions)
     EXPECT_FALSE(fileExists(dir.path("bad.obj")));
     EXPECT_THROW(io::writeMesh(tetrahedron(), dir.path("t.stl")), OutputError);
 }
+
+TEST(MeshIO, VertexAttributesAsPlyPropertiesAndVtkFieldArrays)
+{
+    TempDir dir;
+    const TriangleMesh m = tetrahedron();
+    std::vector<Attribute> attributes(2);
+    attributes[0].name = "v", attributes[0].components = 3;
+    for (int i = 0; i < 12; ++i)
+        attributes[0].floats.push_back(0.5f * float(i));
+    attributes[1].name = "id", attributes[1].type = AttributeType::Int;
+    attributes[1].ints = {7, -3, 2147483647, 0};
+    for (const char* name : {"t.ply", "t.vtk"}) {
+        io::writeMesh(m, dir.path(name), attributes);
+        // read back by the particle reader, which knows nothing of meshes
+        const ParticleSet back = io::readParticles(dir.path(name));
+        EXPECT_EQ(back.positions, m.points) << name;
+        const Attribute* id = back.find("id");
+        ASSERT_NE(id, nullptr) << name;
+        EXPECT_EQ(id->ints, attributes[1].ints) << name;
+        if (std::string(name) == "t.vtk") {
+            ASSERT_NE(back.find("v"), nullptr);
+            EXPECT_EQ(back.find("v")->floats, attributes[0].floats);
+        } else {
+            for (int c = 0; c < 3; ++c) {
+                const Attribute* vc = back.find(std::string("v") + "xyz"[c]);
+                ASSERT_NE(vc, nullptr) << c;
+                for (int i = 0; i < 4; ++i)
+                    EXPECT_EQ(vc->floats[size_t(i)], attributes[0].floats[size_t(3 * i + c)]);
+            }
+            // and the mesh reader still reads the mesh
+            const TriangleMesh read = io::readMesh(dir.path(name));
+            EXPECT_EQ(read.triangles, m.triangles);
+            EXPECT_EQ(read.normals, m.normals);
+        }
+    }
+    EXPECT_THROW(io::writeMesh(m, dir.path("t.obj"), attributes), OutputError);
+    attributes[1].ints[0] = int64_t(1) << 40;
+    EXPECT_THROW(io::writeMesh(m, dir.path("big.ply"), attributes), OutputError);
+    attributes[1].ints.pop_back();
+    EXPECT_THROW(io::writeMesh(m, dir.path("short.ply"), attributes), OutputError);
+    EXPECT_FALSE(fileExists(dir.path("t.obj")) || fileExists(dir.path("big.ply")) ||
+                 fileExists(dir.path("short.ply")));
+}

@@ -4,10 +4,12 @@
 #pragma once
 
 #include <fluidsurf/Mesh.h>
+#include <fluidsurf/ParticleSet.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace fluidsurf {
 namespace io {
@@ -18,6 +20,12 @@ MeshFormat meshFormatFromPath(const std::string& path);
 
 /// OutputError for an unknown extension, indices out of range or a failed write.
 void writeMesh(const TriangleMesh& mesh, const std::string& path);
+/// The same with per-vertex attributes (e.g. ReconstructResult::vertexAttributes): PLY vertex
+/// properties after the normals (a 3-vector "v" as vx vy vz, other vectors v0 v1 ..., integers
+/// as int), VTK point-data field arrays. OutputError for OBJ (it cannot hold them), a size that
+/// does not match the vertices, or an integer beyond 32 bits.
+void writeMesh(const TriangleMesh& mesh, const std::string& path,
+               const std::vector<Attribute>& vertexAttributes);
 
 /// Read an OBJ or PLY mesh (polygons fanned into triangles; normals kept when there is one per
 /// vertex). InputError naming the file, the problem and where (line or byte).
