@@ -100,3 +100,37 @@ def test_bad_attributes():
     np.testing.assert_allclose(raw.attributes["d"], 1, rtol=1e-6)  # a constant stays constant
     with pytest.warns(UserWarning, match="does not carry vertex attributes"):
         assert fluidsurf.post_process(raw).attributes == {}
+
+
+def test_the_vdb_holds_v_as_a_vector_grid(drop, tmp_path):
+    ls = fluidsurf.rasterize(drop["positions"], R, attributes={"v": drop["v"], "id": drop["id"]})
+    assert ls.grid_names == ["surface", "v", "id"]
+    path = str(tmp_path / "d.vdb")
+    ls.write(path)
+    vdb = pytest.importorskip("pyopenvdb")
+    grids = {g.name: g for g in ls.to_pyopenvdb()}
+    assert set(grids) == {"surface", "v"}  # pyopenvdb has no integer grids
+    v = vdb.read(path, "v")
+    assert isinstance(v, vdb.Vec3SGrid) and v.activeVoxelCount() == ls.active_voxels
+    surface = vdb.read(path, "surface")
+    # near the surface (where a renderer samples it) v is the rotation at the voxel
+    acc, sacc = v.getConstAccessor(), surface.getConstAccessor()
+    dx = ls.voxel_size
+    errors, vmax = [], 0.0
+    for item in v.citerOnValues():
+        if item.count != 1:
+            continue
+        ijk = item.min
+        if abs(sacc.getValue(ijk)) >= 1.5 * R:
+            continue
+        truth = rotation(np.array(ijk, np.float64) * dx)
+        errors.append(np.abs(np.array(acc.getValue(ijk)) - truth).max())
+        vmax = max(vmax, np.abs(truth).max())
+    assert len(errors) > 1000
+    assert max(errors) < 0.01 * vmax, (max(errors), vmax)
+    import shutil
+    import subprocess
+
+    if shutil.which("vdb_print"):
+        out = subprocess.run(["vdb_print", path], capture_output=True, text=True).stdout
+        assert any(line.split()[:2] == ["v", "vec3s"] for line in out.splitlines()), out

@@ -5,12 +5,14 @@
 #include "Commands.h"
 #include "Frames.h"
 #include "Options.h"
+
 #include "Progress.h"
 #include "Sequence.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/Reconstruct.h>
+#include <fluidsurf/TransferAttributes.h>
 #include <fluidsurf/io/AtomicFile.h>
 #include <fluidsurf/io/LevelSetIO.h>
 #include <fluidsurf/io/MeshIO.h>
@@ -299,12 +301,9 @@ Runner addReconstructCommand(CLI::App& app)
                     "drop (left out of the mesh)")
         ->capture_default_str()
         ->check(CLI::IsMember({"spheres", "drop"}));
-    cmd->add_option("--attributes", o->pipeline.params.attributes,
-                    "particle attributes to carry onto the mesh's vertices, e.g. v,density,id "
-                    "(a linear fit over the particles within R: a linear field such as a "
-                    "rotation comes out exact; integers from the nearest particle); written as "
-                    "PLY vertex properties (v as vx vy vz) or VTK point data, not into OBJ")
-        ->delimiter(',');
+    addAttributesOption(cmd, o->pipeline,
+                        "written as PLY vertex properties (v as vx vy vz) or VTK point data, not "
+                        "into OBJ; with --vdb also as grids over the level set's band");
     cmd->add_option("--sphere-deviation", o->pipeline.params.post.sphereDeviation,
                     "how far the spheres' faces may dip inside their radius, as a fraction of it; "
                     "picks the icosphere level (0.01: 1,280 triangles, 0.05: 320)")
@@ -336,6 +335,8 @@ Runner addReconstructCommand(CLI::App& app)
         outputs.insert(outputs.end(), vdbOutputs.begin(), vdbOutputs.end());
         refuseOverwritingInputs(inputsOf(jobs), outputs);
         ReconstructParams params = po.resolved();
+        const std::vector<std::string> gridAttributes =
+            vdbJobs.empty() ? std::vector<std::string>() : params.attributes;
         if (!params.attributes.empty() && !jobs.empty() &&
             io::meshFormatFromPath(jobs[0].output) == io::MeshFormat::Obj) {
             std::fprintf(stderr,
@@ -374,10 +375,15 @@ Runner addReconstructCommand(CLI::App& app)
                 // The frame's .vdb and mesh appear together, after both were written.
                 io::OutputGroup outputs;
                 if (!vdbJobs.empty()) {
+                    openvdb::GridPtrVec grids = res.adaptiveGrid.empty()
+                                                    ? openvdb::GridPtrVec{res.levelSet}
+                                                    : res.adaptiveGrid.grids();
+                    const openvdb::GridPtrVec more =
+                        attributeGrids(ps, gridAttributes, *res.levelSet,
+                                       params.fieldParams(params.radius).influenceRadius, ctx);
+                    grids.insert(grids.end(), more.begin(), more.end());
                     const auto t = ctx.scope("write vdb");
-                    io::writeLevelSet(res.adaptiveGrid.empty() ? openvdb::GridPtrVec{res.levelSet}
-                                                               : res.adaptiveGrid.grids(),
-                                      outputs.add(vdbJobs[i].output));
+                    io::writeLevelSet(grids, outputs.add(vdbJobs[i].output));
                 }
                 if (!po.quiet && !bar.enabled() && (res.field.isolated || ri.droppedNonFinite))
                     std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",

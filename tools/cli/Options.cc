@@ -187,6 +187,17 @@ std::unique_ptr<tbb::global_control> PipelineOptions::setUp(Context& ctx) const
                                                  size_t(threads));
 }
 
+void addAttributesOption(CLI::App* cmd, PipelineOptions& o, const char* where)
+{
+    cmd->add_option(
+           "--attributes", o.params.attributes,
+           std::string("particle attributes to carry along, e.g. v,density,id (floats by a "
+                       "linear fit over the particles within R: a linear field such as a "
+                       "rotation comes out exact; integers from the nearest particle); ") +
+               where)
+        ->delimiter(',');
+}
+
 double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first)
 {
     const RadiusChoice c = chooseRadius(first, o.params.radius, !o.ignoreRadiusAttribute);

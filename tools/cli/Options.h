@@ -46,6 +46,9 @@ void addFieldOptions(CLI::App* cmd, PipelineOptions& o);
 enum class Makes { LevelSet, MeshedLevelSet, Mesh };
 void addRunOptions(CLI::App* cmd, PipelineOptions& o, Makes makes);
 
+/// --attributes NAME,...: particle attributes carried onto the output; where says where to.
+void addAttributesOption(CLI::App* cmd, PipelineOptions& o, const char* where);
+
 /// r for a sequence from its first frame, printed with its source (an estimate as "ESTIMATE").
 double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first);
 

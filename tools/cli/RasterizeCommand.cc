@@ -7,6 +7,7 @@
 #include "Sequence.h"
 
 #include <fluidsurf/Rasterize.h>
+#include <fluidsurf/TransferAttributes.h>
 #include <fluidsurf/io/LevelSetIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
@@ -36,6 +37,8 @@ Runner addRasterizeCommand(CLI::App& app)
     cmd->add_option("--frames", o->frames, "frame range A-B for a pattern");
     addFieldOptions(cmd, o->pipeline);
     addRunOptions(cmd, o->pipeline, Makes::LevelSet);
+    addAttributesOption(cmd, o->pipeline,
+                        "written as grids over the level set's band beside it (v as a Vec3fGrid)");
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
                   "drop particles with NaN/Inf coordinates instead of failing");
     addSequenceOptions(cmd, o->sequence);
@@ -78,13 +81,18 @@ Runner addRasterizeCommand(CLI::App& app)
                 const ParticleSet ps =
                     readFrame(po, ctx, jobs[i].input, ro, ri, !radiusChosen, params);
                 radiusChosen = true;
+                checkAttributeNames(ps, params.attributes); // before the work
                 const RasterizeResult res =
                     rasterizeParticles(ps, params.fieldParams(params.radius), ctx, jobs[i].input);
+                openvdb::GridPtrVec grids =
+                    res.adaptive.empty() ? openvdb::GridPtrVec{res.grid} : res.adaptive.grids();
+                const openvdb::GridPtrVec more =
+                    attributeGrids(ps, params.attributes, *res.grid,
+                                   params.fieldParams(params.radius).influenceRadius, ctx);
+                grids.insert(grids.end(), more.begin(), more.end());
                 {
                     const auto t = ctx.scope("write");
-                    io::writeLevelSet(res.adaptive.empty() ? openvdb::GridPtrVec{res.grid}
-                                                           : res.adaptive.grids(),
-                                      jobs[i].output);
+                    io::writeLevelSet(grids, jobs[i].output);
                 }
                 ctx.timing().finish();
                 const RasterizeStats& s = res.stats;

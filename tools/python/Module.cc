@@ -16,6 +16,7 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/Reconstruct.h>
 #include <fluidsurf/Scenes.h>
+#include <fluidsurf/TransferAttributes.h>
 #include <fluidsurf/Version.h>
 #include <fluidsurf/io/ParticleIO.h>
 
@@ -87,19 +88,26 @@ PyMesh reconstructArrays(py::handle positions, double radius, py::handle radii,
 }
 
 PyLevelSet rasterizeArrays(py::handle positions, double radius, py::handle radii,
-                           const py::kwargs& kwargs)
+                           py::handle attributes, const py::kwargs& kwargs)
 {
     Settings s = settingsFrom(kwargs, kField | kRun);
-    const ParticleSet ps = particlesFrom(positions, radii, py::none());
+    const ParticleSet ps = particlesFrom(positions, radii, attributes);
+    if (!attributes.is_none())
+        for (auto item : py::reinterpret_borrow<py::dict>(attributes))
+            s.params.attributes.push_back(py::str(item.first));
     Context ctx;
     setUp(ctx, s);
     RadiusChoice choice;
+    openvdb::GridPtrVec grids;
     RasterizeResult res = compute(s, [&] {
         choice = chooseRadius(ps, checkedRadius(radius), s.params.field.perParticleRadii);
-        return rasterizeParticles(ps, s.params.fieldParams(choice.radius), ctx);
+        const Params field = s.params.fieldParams(choice.radius);
+        RasterizeResult r = rasterizeParticles(ps, field, ctx);
+        grids = attributeGrids(ps, s.params.attributes, *r.grid, field.influenceRadius, ctx);
+        return r;
     });
     ctx.timing().finish();
-    PyLevelSet out{res.grid, res.adaptive, py::dict()};
+    PyLevelSet out{res.grid, res.adaptive, py::dict(), std::move(grids)};
     addFieldInfo(out.info, choice, res.stats, res.isolatedParticles);
     out.info["timing"] = ctx.timing().format();
     return out;
@@ -209,9 +217,12 @@ PYBIND11_MODULE(fluidsurf, m)
            describeParams(kAll) + ". Returns a Mesh.")
               .c_str());
     m.def("rasterize", &rasterizeArrays, py::arg("positions"), py::arg("radius") = 0.0,
-          py::kw_only(), py::arg("radii") = py::none(),
+          py::kw_only(), py::arg("radii") = py::none(), py::arg("attributes") = py::none(),
           (std::string("Particles to a narrow-band level set, as `fluidsurf rasterize`. ") +
-           kParticlesDoc + "Parameters: " + describeParams(kField | kRun) + ". Returns a LevelSet.")
+           kParticlesDoc +
+           "attributes: {name: (N,) or (N, k) array} carried onto the band as grids of its "
+           "topology (LevelSet.grid_names; v as a Vec3fGrid), written with it. Parameters: " +
+           describeParams(kField | kRun) + ". Returns a LevelSet.")
               .c_str());
     m.def(
         "defaults", []() { return defaults(kAll); },

@@ -159,6 +159,15 @@ py::array_t<float> sample(const openvdb::FloatGrid& grid, const std::vector<Vec3
     return out;
 }
 
+/// Every grid a LevelSet writes: the level set (or the adaptive grid's three), then attributes.
+openvdb::GridPtrVec allGrids(const PyLevelSet& ls)
+{
+    openvdb::GridPtrVec grids =
+        ls.adaptive.empty() ? openvdb::GridPtrVec{ls.grid} : ls.adaptive.grids();
+    grids.insert(grids.end(), ls.attributeGrids.begin(), ls.attributeGrids.end());
+    return grids;
+}
+
 void bindLevelSet(py::module_& m)
 {
     py::class_<PyLevelSet>(m, "LevelSet",
@@ -176,11 +185,8 @@ void bindLevelSet(py::module_& m)
         .def_property_readonly("grid_names",
                                [](const PyLevelSet& ls) {
                                    py::list names;
-                                   if (ls.adaptive.empty())
-                                       names.append(ls.grid->getName());
-                                   else
-                                       for (const auto& g : ls.adaptive.grids())
-                                           names.append(g->getName());
+                                   for (const auto& g : allGrids(ls))
+                                       names.append(g->getName());
                                    return names;
                                })
         .def_readonly("info", &PyLevelSet::info)
@@ -196,10 +202,10 @@ void bindLevelSet(py::module_& m)
             "write",
             [](const PyLevelSet& ls, const std::string& path) {
                 py::gil_scoped_release noGil;
-                io::writeLevelSet(
-                    ls.adaptive.empty() ? openvdb::GridPtrVec{ls.grid} : ls.adaptive.grids(), path);
+                io::writeLevelSet(allGrids(ls), path);
             },
-            py::arg("path"), "Write a .vdb (Blosc), atomically; any VDB tool opens it.")
+            py::arg("path"),
+            "Write a .vdb (Blosc), atomically, with the attribute grids; any VDB tool opens it.")
         .def(
             "mesh",
             [](const PyLevelSet& ls, const py::kwargs& kwargs) {
@@ -232,14 +238,13 @@ void bindLevelSet(py::module_& m)
                 try {
                     {
                         py::gil_scoped_release noGil;
-                        io::writeLevelSet(ls.adaptive.empty() ? openvdb::GridPtrVec{ls.grid}
-                                                              : ls.adaptive.grids(),
-                                          path);
+                        io::writeLevelSet(allGrids(ls), path);
                     }
-                    py::object grids = vdb.attr("readAllGridMetadata")(path);
                     py::list out;
-                    for (py::handle g : grids)
-                        out.append(vdb.attr("read")(path, g.attr("name")));
+                    for (const auto& g : allGrids(ls)) // pyopenvdb reads float and vec3s only
+                        // (not isType<>: see CMakeLists.txt)
+                        if (g->valueType() == "float" || g->valueType() == "vec3s")
+                            out.append(vdb.attr("read")(path, g->getName()));
                     dir.attr("cleanup")();
                     return out.size() == 1 ? py::object(out[0]) : py::object(out);
                 } catch (...) {
@@ -247,8 +252,9 @@ void bindLevelSet(py::module_& m)
                     throw;
                 }
             },
-            "The grid(s) as pyopenvdb objects (Debian's python3-openvdb): one grid, or the "
-            "adaptive grid's three as a list.")
+            "The grid(s) as pyopenvdb objects (Debian's python3-openvdb): one grid, or a list "
+            "(the adaptive grid's, attribute grids; integer grids are left out: pyopenvdb "
+            "cannot hold them).")
         .def("__repr__", [](const PyLevelSet& ls) {
             return "<fluidsurf.LevelSet " + std::string(ls.adaptive.empty() ? "" : "adaptive, ") +
                    "voxel " + std::to_string(ls.grid->voxelSize()[0]) + ", " +
@@ -259,7 +265,7 @@ void bindLevelSet(py::module_& m)
         "read_level_set",
         [](const std::string& path, const std::string& grid) {
             io::LevelSetFile f = io::readLevelSetFile(path, grid);
-            return PyLevelSet{f.grid, f.adaptive, py::dict()};
+            return PyLevelSet{f.grid, f.adaptive, py::dict(), {}};
         },
         py::arg("path"), py::arg("grid") = "",
         "Read a level set from a .vdb: the grid named grid, else the adaptive grid when the file "

@@ -26,6 +26,7 @@ struct PyLevelSet
     openvdb::FloatGrid::Ptr grid; ///< with an adaptive grid, its level 2 ("surface")
     AdaptiveGrid adaptive;
     pybind11::dict info;
+    openvdb::GridPtrVec attributeGrids; ///< particle attributes over the band ("v", ...)
 };
 
 /// Adds the classes Mesh and LevelSet (and read_mesh, read_level_set, post_process) to m.

@@ -9,15 +9,19 @@
 // |omega| r. As weights: value = sum_j w_j (1/W - u . (d_j - dbar)) f_j with d_j = x_j - x,
 // W = sum w_j, dbar = sum w_j d_j / W, u = M^-1 dbar and M = sum w_j (d_j - dbar)(d_j - dbar)^T
 // (with a ridge of 1e-4 trace(M) on M: where the particles form a sheet or a line, the slope
-// across them is unknown and taken as flat). Integer attributes (ids, flags) are not averaged:
-// each point takes the nearest particle's. A point with no particle within R takes the nearest
-// particle's value, for floats too.
+// across them is unknown and taken as flat). Where the particles within R spread too little
+// (det M < 0.01 (trace M / 3)^3: a point of the band's outer layer sees one layer of particles),
+// the fit is made over 2R instead when the particles there spread enough. Integer attributes (ids,
+// flags) are not averaged: each point takes the nearest particle's. A point with no particle within
+// R takes the nearest particle's value, for floats too.
 //
 // Parallel over points, each summed in the same order for any thread count (deterministic).
 #pragma once
 
 #include <fluidsurf/Context.h>
 #include <fluidsurf/ParticleSet.h>
+
+#include <openvdb/openvdb.h>
 
 #include <string>
 #include <vector>
@@ -41,5 +45,15 @@ std::vector<Attribute> transferAttributes(const ParticleSet& particles,
                                           const std::vector<std::string>& names,
                                           const std::vector<Vec3f>& points, double influenceRadius,
                                           Context& ctx);
+
+/// The same at the active voxels of levelSet, as VDB grids of its transform and active topology
+/// (background 0), named after the attributes, for a .vdb beside the level set (as Houdini's
+/// particle surfacer writes "v"): a float 3-vector as a Vec3fGrid, a float scalar as a
+/// FloatGrid, an integer as an Int32Grid (Int64Grid where a value needs it); other component counts
+/// as one grid per component (name0, name1, ...). Timed as "transfer" too.
+openvdb::GridPtrVec attributeGrids(const ParticleSet& particles,
+                                   const std::vector<std::string>& names,
+                                   const openvdb::FloatGrid& levelSet, double influenceRadius,
+                                   Context& ctx);
 
 } // namespace fluidsurf

@@ -17,6 +17,10 @@ namespace fluidsurf {
 
 namespace {
 
+/// Below this spread (det / (trace / 3)^3 of the particles' weighted covariance) a fit over R
+/// is retried over 2R: a single flat layer gives ~0, a half-space of lattice particles ~0.2.
+constexpr double kMinSpread = 0.01;
+
 struct Neighbour
 {
     uint32_t index; ///< into the input particles
@@ -77,8 +81,21 @@ uint32_t nearest(const neighbors::CellIndex& cells, const Vec3f& p, double R)
     }
 }
 
+/// det(M) / (trace(M) / 3)^3: 1 where the particles spread alike in every direction, 0 where
+/// they form a sheet, a line or one point.
+double spread(const double M[3][3])
+{
+    const double t = (M[0][0] + M[1][1] + M[2][2]) / 3;
+    if (!(t > 0)) return 0;
+    const double det = M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) -
+                       M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
+                       M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
+    return det / (t * t * t);
+}
+
 /// The weights phi_j of the linear fit at the point (TransferAttributes.h); sum phi_j = 1.
-void linearWeights(std::vector<Neighbour>& nb, double R, std::vector<double>& phi)
+/// Returns the spread of the particles (above).
+double linearWeights(std::vector<Neighbour>& nb, double R, std::vector<double>& phi)
 {
     double W = 0, m[3] = {0, 0, 0};
     for (const Neighbour& n : nb) {
@@ -94,6 +111,7 @@ void linearWeights(std::vector<Neighbour>& nb, double R, std::vector<double>& ph
             for (int b = 0; b < 3; ++b)
                 M[a][b] += n.w * e[a] * e[b];
     }
+    const double spreadOf = spread(M);
     // The ridge: a direction in which the particles do not spread gets no slope. Its floor
     // (relative to W R^2) covers one particle, or several in one place, where M is rounding
     // noise: the fit is then their average.
@@ -118,6 +136,7 @@ void linearWeights(std::vector<Neighbour>& nb, double R, std::vector<double>& ph
             u[0] * (n.d[0] - dbar[0]) + u[1] * (n.d[1] - dbar[1]) + u[2] * (n.d[2] - dbar[2]);
         phi[j] = n.w * (1 / W - along);
     }
+    return spreadOf;
 }
 
 std::string namesOf(const ParticleSet& ps)
@@ -188,8 +207,8 @@ std::vector<Attribute> transferAttributes(const ParticleSet& ps,
         tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 256),
                           [&](const tbb::blocked_range<size_t>& range) {
                               ctx.checkpoint();
-                              std::vector<Neighbour> nb;
-                              std::vector<double> phi;
+                              std::vector<Neighbour> nb, wide;
+                              std::vector<double> phi, widePhi;
                               for (size_t i = range.begin(); i != range.end(); ++i) {
                                   gather(cells, points[i], R, nb);
                                   uint32_t near = 0;
@@ -201,7 +220,14 @@ std::vector<Attribute> transferAttributes(const ParticleSet& ps,
                                           near = n.index, nearD2 = d2;
                                   }
                                   if (nb.empty()) near = nearest(cells, points[i], R);
-                                  if (!nb.empty()) linearWeights(nb, R, phi);
+                                  // Too flat a neighbourhood (the band's outer voxels see
+                                  // only the outer layer of particles): a wider one, where
+                                  // that spreads in every direction.
+                                  if (!nb.empty() && linearWeights(nb, R, phi) < kMinSpread) {
+                                      gather(cells, points[i], 2 * R, wide);
+                                      if (linearWeights(wide, 2 * R, widePhi) >= kMinSpread)
+                                          nb.swap(wide), phi.swap(widePhi);
+                                  }
                                   for (size_t k = 0; k < out.size(); ++k) {
                                       const Attribute& src = *sources[k];
                                       Attribute& dst = out[k];
