@@ -266,9 +266,20 @@ Runner addPostCommand(CLI::App& app)
         const PostProcessParams post = o->pipeline.resolved().post;
         return runMeshFrames(*o, "post", [&](const std::string& input, Context& ctx, auto& counts) {
             TriangleMesh mesh;
+            std::vector<std::string> dropped;
             {
                 const auto t = ctx.scope("read");
-                mesh = io::readMesh(input);
+                mesh = io::readMesh(input, &dropped);
+            }
+            if (!dropped.empty()) {
+                std::string names;
+                for (const std::string& n : dropped)
+                    names += (names.empty() ? "" : " ") + n;
+                std::fprintf(stderr,
+                             "fluidsurf: warning: %s: vertex properties %s are not carried "
+                             "through post (reconstruct --attributes evaluates them at the "
+                             "final vertices)\n",
+                             input.c_str(), names.c_str());
             }
             if (mesh.triangles.empty())
                 throw InputError(input + ": no triangles to post-process (" +

@@ -67,7 +67,8 @@ TriangleMesh readObj(const uint8_t* data, size_t size, const std::string& path)
     return m;
 }
 
-TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path)
+TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path,
+                     std::vector<std::string>* dropped)
 {
     ByteReader in(data, size, path);
     const io_internal::PlyHeader header = io_internal::readPlyHeader(in);
@@ -93,6 +94,10 @@ TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path)
             }
             if (e.props[k].isList && (n == "vertex_indices" || n == "vertex_index"))
                 indices = int(k);
+            const bool kept = n.size() == 1
+                                  ? n.find_first_of("xyz") == 0
+                                  : n.size() == 2 && n[0] == 'n' && n.find_first_of("xyz", 1) == 1;
+            if (vertex && dropped && !kept) dropped->push_back(n);
         }
         if (vertex && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0))
             in.fail("the PLY vertex element has no x, y, z properties");
@@ -144,19 +149,20 @@ TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path)
 } // namespace
 
 TriangleMesh readMeshFromMemory(const uint8_t* data, size_t size, MeshFormat format,
-                                const std::string& source)
+                                const std::string& source, std::vector<std::string>* dropped)
 {
     if (format != MeshFormat::Obj && format != MeshFormat::Ply)
         throw InputError(source + ": cannot read this mesh type (readable: .obj .ply; .vtk "
                                   "meshes are written only)");
     if (size == 0) throw InputError(source + ": file is empty");
-    return format == MeshFormat::Obj ? readObj(data, size, source) : readPly(data, size, source);
+    return format == MeshFormat::Obj ? readObj(data, size, source)
+                                     : readPly(data, size, source, dropped);
 }
 
-TriangleMesh readMesh(const std::string& path)
+TriangleMesh readMesh(const std::string& path, std::vector<std::string>* dropped)
 {
     const std::vector<uint8_t> bytes = io_internal::readFile(path);
-    return readMeshFromMemory(bytes.data(), bytes.size(), meshFormatFromPath(path), path);
+    return readMeshFromMemory(bytes.data(), bytes.size(), meshFormatFromPath(path), path, dropped);
 }
 
 } // namespace io

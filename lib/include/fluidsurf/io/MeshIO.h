@@ -29,11 +29,15 @@ void writeMesh(const TriangleMesh& mesh, const std::string& path,
 
 /// Read an OBJ or PLY mesh (polygons fanned into triangles; normals kept when there is one per
 /// vertex). InputError naming the file, the problem and where (line or byte).
-TriangleMesh readMesh(const std::string& path);
+/// droppedProperties (when given) receives the names of PLY vertex properties beyond x y z and
+/// nx ny nz, which a TriangleMesh does not hold (e.g. the vx vy vz of writeMesh's attributes).
+TriangleMesh readMesh(const std::string& path,
+                      std::vector<std::string>* droppedProperties = nullptr);
 
 /// The same from bytes in memory (format Obj or Ply); source names them in errors.
 TriangleMesh readMeshFromMemory(const uint8_t* data, size_t size, MeshFormat format,
-                                const std::string& source);
+                                const std::string& source,
+                                std::vector<std::string>* droppedProperties = nullptr);
 
 } // namespace io
 } // namespace fluidsurf
