@@ -67,15 +67,22 @@ const char* kParticlesDoc =
     "radius r (half the rest spacing), world units; 0 chooses it from radii, else estimates it "
     "(info['radius_source'] says which). radii: optional (N,) per-particle radii (as pscale). ";
 
+/// The call's particles; every attribute given is one to carry (into s.params.attributes).
+ParticleSet particlesFor(Settings& s, py::handle positions, py::handle radii, py::handle attributes)
+{
+    ParticleSet ps = particlesFrom(positions, radii, attributes);
+    if (!attributes.is_none())
+        for (auto item : py::reinterpret_borrow<py::dict>(attributes))
+            s.params.attributes.push_back(py::str(item.first));
+    return ps;
+}
+
 PyMesh reconstructArrays(py::handle positions, double radius, py::handle radii,
                          py::handle attributes, const py::kwargs& kwargs)
 {
     Settings s = settingsFrom(kwargs, kAll);
     s.params.radius = checkedRadius(radius);
-    const ParticleSet ps = particlesFrom(positions, radii, attributes);
-    if (!attributes.is_none())
-        for (auto item : py::reinterpret_borrow<py::dict>(attributes))
-            s.params.attributes.push_back(py::str(item.first));
+    const ParticleSet ps = particlesFor(s, positions, radii, attributes);
     Context ctx;
     setUp(ctx, s);
     ReconstructResult res = compute(s, [&] { return reconstruct(ps, s.params, ctx); });
@@ -91,10 +98,7 @@ PyLevelSet rasterizeArrays(py::handle positions, double radius, py::handle radii
                            py::handle attributes, const py::kwargs& kwargs)
 {
     Settings s = settingsFrom(kwargs, kField | kRun);
-    const ParticleSet ps = particlesFrom(positions, radii, attributes);
-    if (!attributes.is_none())
-        for (auto item : py::reinterpret_borrow<py::dict>(attributes))
-            s.params.attributes.push_back(py::str(item.first));
+    const ParticleSet ps = particlesFor(s, positions, radii, attributes);
     Context ctx;
     setUp(ctx, s);
     RadiusChoice choice;
