@@ -84,7 +84,7 @@ fi
 for i in 1 2 3; do "$BIN" generate slab -n 500 --seed $i -o "$T/seq_000$i.bgeo" >/dev/null; done
 check "convert a sequence with --frames" "$BIN" convert -q "$T/seq_{:04}.bgeo" "$T/out_####.ply" --frames 1-3
 check "sequence outputs exist" test -f "$T/out_0001.ply" -a -f "$T/out_0002.ply" -a -f "$T/out_0003.ply"
-check "sequence without --frames takes the files on disk" bash -c "'$BIN' convert '$T/seq_%04d.bgeo' '$T/x_%04d.xyz' | grep -q 'converted 3 frame'"
+check "sequence without --frames takes the files on disk" bash -c "'$BIN' convert '$T/seq_%04d.bgeo' '$T/x_%04d.xyz' | grep -q 'convert 3 frames: 3 done'"
 check "info on a pattern" bash -c "[ \$('$BIN' info --no-spacing '$T/seq_####.bgeo' | grep -c 'particles') -eq 3 ]"
 check "no progress bar when piped" bash -c "! '$BIN' convert '$T/seq_{:04}.bgeo' '$T/y_{:04}.xyz' 2>&1 | grep -q \$'\r'"
 expect_error "pattern in, single file out" "must be a pattern" "$BIN" convert "$T/seq_{:04}.bgeo" "$T/single.ply"

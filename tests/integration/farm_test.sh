@@ -4,7 +4,7 @@
 # finished frames alone (their files untouched); --shard I/N splits a sequence into disjoint
 # shares that cover it, --shard slurm takes the frame $SLURM_ARRAY_TASK_ID; a shard chooses r
 # from the sequence's first frame, as a whole run does (the same mesh, byte for byte); mesh
-# (and post, through the same loop) pass over a corrupt .vdb.
+# (and post, through the same loop) pass over a corrupt .vdb; convert takes the same options.
 set -u
 BIN=$1
 T=$(mktemp -d /tmp/fluidsurf_farm_XXXXXX)
@@ -91,6 +91,17 @@ expect_error "--shard 3/2" "expected I/N with 1 <= I <= N" \
 expect_error "--shard on a single file" "needs a frame pattern" \
     "$BIN" reconstruct f_0002.bgeo -r 0.01 -o x.ply --shard 1/2
 check "--shard: nothing written by the refused runs" bash -c "! ls x_* x.ply 2>/dev/null | grep -q ."
+
+# --- convert: the same options (frames 1, 2, 3, 5, 6 now, frame 1 cut short) -------------------
+out=$("$BIN" convert 'f_{:04}.bgeo' 'c_{:04}.xyz' --keep-going 2>c.err)
+rc=$?
+check "convert --keep-going: exit 1 (got $rc), every good frame converted, the bad one listed" \
+    bash -c "[ $rc -eq 1 ] && [ -s c_0002.xyz ] && [ -s c_0006.xyz ] && [ ! -e c_0001.xyz ] && grep -q '^  f_0001.bgeo$' c.err"
+check "convert --keep-going: the summary" grep -q "convert 5 frames: 4 done, 0 skipped, 1 failed" <<<"$out"
+touch -d '2001-01-01' c_0002.xyz
+out=$("$BIN" convert 'f_{:04}.bgeo' 'c_{:04}.xyz' --skip-existing --shard 2/3 2>/dev/null)
+check "convert --skip-existing --shard 2/3: frames 2 and 6 skipped, untouched" bash -c \
+    "grep -q 'convert 2 frames: 0 done, 2 skipped, 0 failed' <<<'$out' && [ \$(stat -c %Y c_0002.xyz) -lt 1000000000 ]"
 
 echo "farm tests: $pass passed, $fail failed"
 [ $fail -eq 0 ]

@@ -2,10 +2,10 @@
 #include "Commands.h"
 #include "Frames.h"
 #include "Progress.h"
+#include "Sequence.h"
 
 #include <fluidsurf/io/ParticleIO.h>
 
-#include <chrono>
 #include <cstdio>
 #include <memory>
 
@@ -17,6 +17,7 @@ struct ConvertOptions
 {
     std::string input, output, frames;
     bool dropNonFinite = false, noCompress = false, quiet = false;
+    SequenceOptions sequence;
 };
 } // namespace
 
@@ -34,8 +35,11 @@ Runner addConvertCommand(CLI::App& app)
                   "drop particles with NaN/Inf coordinates instead of failing");
     cmd->add_flag("--no-compress", o->noCompress, "write VDB points without Blosc compression");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no per-frame lines");
-    cmd->footer("Examples:\n  fluidsurf convert frame.vtk frame.vdb\n"
-                "  fluidsurf convert 'sim/f_####.bgeo' 'out/f_####.ply' --frames 1-100");
+    addSequenceOptions(cmd, o->sequence);
+    cmd->footer(
+        "Examples:\n  fluidsurf convert frame.vtk frame.vdb\n"
+        "  fluidsurf convert 'sim/f_####.bgeo' 'out/f_####.ply' --frames 1-100\n"
+        "  fluidsurf convert 'sim/f_####.vtk' 'vdb/f_####.vdb' --shard slurm --skip-existing");
     return [o]() {
         const auto jobs = planFrames(o->input, o->output, o->frames);
         refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
@@ -43,30 +47,28 @@ Runner addConvertCommand(CLI::App& app)
         ro.dropNonFinite = o->dropNonFinite;
         io::WriteOptions wo;
         wo.compress = !o->noCompress;
-        Progress bar(jobs.size(), "convert", o->quiet);
-        size_t total = 0;
-        const auto start = std::chrono::steady_clock::now();
-        for (size_t i = 0; i < jobs.size(); ++i) {
-            bar.update(i, jobs[i].input);
-            io::ReadInfo ri;
-            const ParticleSet ps = io::readParticles(jobs[i].input, ro, &ri);
-            io::writeParticles(ps, jobs[i].output, wo);
-            total += ps.size();
-            if (!o->quiet && !bar.enabled()) {
-                std::printf("%s -> %s: %zu particles", jobs[i].input.c_str(),
-                            jobs[i].output.c_str(), ps.size());
-                if (ri.droppedNonFinite)
-                    std::printf(" (%zu non-finite dropped)", ri.droppedNonFinite);
-                std::printf("\n");
-            }
+        const std::vector<size_t> picked = shardOf(jobs, o->sequence.shard);
+        SequenceRun run(o->sequence, o->quiet);
+        Progress bar(picked.size(), "convert", o->quiet);
+        for (size_t k = 0; k < picked.size(); ++k) {
+            const FrameJob& job = jobs[picked[k]];
+            if (run.skip({job.output})) continue;
+            run.frame(job.input, [&] {
+                bar.update(k, job.input);
+                io::ReadInfo ri;
+                const ParticleSet ps = io::readParticles(job.input, ro, &ri);
+                io::writeParticles(ps, job.output, wo);
+                if (!o->quiet && !bar.enabled()) {
+                    std::printf("%s -> %s: %zu particles", job.input.c_str(), job.output.c_str(),
+                                ps.size());
+                    if (ri.droppedNonFinite)
+                        std::printf(" (%zu non-finite dropped)", ri.droppedNonFinite);
+                    std::printf("\n");
+                }
+            });
         }
         bar.finish();
-        const double secs =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (jobs.size() > 1)
-            std::printf("converted %zu frame(s), %zu particles in %.2f s\n", jobs.size(), total,
-                        secs);
-        return 0;
+        return run.finish("convert", picked.size());
     };
 }
 
