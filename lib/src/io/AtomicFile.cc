@@ -2,6 +2,8 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/io/AtomicFile.h>
 
+#include "io/StreamFile.h"
+
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
@@ -91,16 +93,38 @@ void AtomicFile::commit()
     mCommitted = true;
 }
 
+StreamFile::StreamFile(const std::string& path) : mFile(path)
+{
+    mStream = std::fopen(mFile.tempPath().c_str(), "wb");
+    if (!mStream) throw OutputError(path + ": cannot create: " + std::strerror(errno));
+}
+
+StreamFile::~StreamFile()
+{
+    if (mStream) std::fclose(mStream); // an error on the way: AtomicFile removes the temporary
+}
+
+void StreamFile::write(const void* data, size_t size)
+{
+    if (size && std::fwrite(data, 1, size, mStream) != size)
+        throw OutputError(mFile.target() + ": write failed: " + std::strerror(errno));
+}
+
+void StreamFile::commit()
+{
+    const bool ok = std::fflush(mStream) == 0;
+    const int err = errno;
+    const bool closed = std::fclose(mStream) == 0;
+    mStream = nullptr;
+    if (!ok || !closed)
+        throw OutputError(mFile.target() + ": write failed: " + std::strerror(ok ? errno : err));
+    mFile.commit();
+}
+
 void writeFileAtomic(const std::string& path, const void* data, size_t size)
 {
-    AtomicFile file(path);
-    FILE* f = std::fopen(file.tempPath().c_str(), "wb");
-    if (!f) throw OutputError(path + ": cannot create: " + std::strerror(errno));
-    const size_t written = size ? std::fwrite(data, 1, size, f) : 0;
-    const bool ok = written == size && std::fflush(f) == 0;
-    const int err = errno;
-    if (std::fclose(f) != 0 || !ok)
-        throw OutputError(path + ": write failed: " + std::strerror(ok ? errno : err));
+    StreamFile file(path);
+    file.write(data, size);
     file.commit();
 }
 
