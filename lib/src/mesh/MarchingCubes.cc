@@ -25,7 +25,7 @@ using openvdb::Coord;
 using FloatTree = openvdb::FloatTree;
 using FloatLeaf = FloatTree::LeafNodeType;
 /// Per active voxel: (number of the first vertex on its +x/+y/+z edges) << 3 | crossing-axis bits.
-using IndexTree = openvdb::Int64Tree;
+using IndexTree = openvdb::UInt32Tree; // (first vertex << 3) | edge bits: 4 bytes a voxel
 using IndexLeaf = IndexTree::LeafNodeType;
 
 /// Value and active state of the voxel at local offset (x, y, z) + d of leaf, through the leaf
@@ -153,8 +153,9 @@ struct Passes
                                                   : (in ^ nx.in[0]) & act & nx.active[0];
                         for (uint64_t todo = act; todo; todo &= todo - 1) {
                             const int b = __builtin_ctzll(todo);
-                            const int64_t edges = int64_t(ex >> b & 1) | int64_t(ey >> b & 1) << 1 |
-                                                  int64_t(ez >> b & 1) << 2;
+                            const uint32_t edges = uint32_t(ex >> b & 1) |
+                                                   uint32_t(ey >> b & 1) << 1 |
+                                                   uint32_t(ez >> b & 1) << 2;
                             leaf->setValueOnly(openvdb::Index(x << 6 | b), edges);
                             n += kBitCount[edges];
                         }
@@ -179,16 +180,16 @@ struct Passes
                     const FloatLeaf& values = valueLeaf(*leaf);
                     const LeafStar star = this->star(*leaf);
                     const LeafBits& here = bits[leaf.pos()];
-                    int64_t* packed = leaf->buffer().data();
+                    uint32_t* packed = leaf->buffer().data();
                     const float* buffer = values.buffer().data();
                     uint64_t next = first[leaf.pos()];
                     for (int x = 0; x < 8; ++x)
                         for (uint64_t todo = here.active[x]; todo; todo &= todo - 1) {
                             const int offset = x << 6 | __builtin_ctzll(todo);
-                            const int64_t edges = packed[offset];
+                            const uint32_t edges = packed[offset];
                             if (!edges)
                                 continue; // only voxels with crossing edges are ever looked up
-                            packed[offset] = int64_t(next) << 3 | edges;
+                            packed[offset] = uint32_t(next) << 3 | edges;
                             const Coord l = FloatLeaf::offsetToLocalCoord(openvdb::Index(offset)),
                                         a = values.origin() + l;
                             const openvdb::Vec3d ga = star.gradient(l);
@@ -326,7 +327,7 @@ struct Passes
             for (int a = 0; a < 3; ++a)
                 g[a] += kCorner[kEdges.lowCorner[e]][a];
             const Coord l = g - indexLeaf.origin();
-            const int64_t packed =
+            const uint32_t packed =
                 (unsigned(l.x()) | unsigned(l.y()) | unsigned(l.z())) < IndexLeaf::DIM
                     ? indexLeaf.getValue(IndexLeaf::coordToOffset(l))
                     : idx.getValue(g);
@@ -391,14 +392,15 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
         voxelized->voxelizeActiveTiles();
         tree = voxelized.get();
     }
-    IndexTree index(*tree, int64_t(0), openvdb::TopologyCopy());
+    IndexTree index(*tree, uint32_t(0), openvdb::TopologyCopy());
     openvdb::tree::LeafManager<IndexTree> leaves(index);
     Passes passes{*tree, Affine(grid.transform()), index, leaves, ctx, {}, {}, {}};
     TriangleMesh mesh;
     passes.readBits();
     passes.markEdges();
-    if (passes.first.back() >= kLocalVertex)
-        throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");
+    // a voxel's first vertex number must fit 29 bits beside its 3 edge bits (IndexTree)
+    if (passes.first.back() >= (uint64_t(1) << 29))
+        throw ValueError("the level set has more than 2^29 surface vertices; mesh it in parts");
     passes.placeVertices(mesh);
     std::vector<LeafMesh> perLeaf;
     const size_t cells = passes.triangulate(perLeaf, mesh);

@@ -8,6 +8,9 @@
 #include "post/IsolatedSpheres.h"
 
 #include <algorithm>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 #include <cmath>
 #include <limits>
 
@@ -121,6 +124,11 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
     } else {
         res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing);
     }
+#ifdef __GLIBC__
+    // The mesher's scratch (a topology copy of the band, per-leaf pieces) is freed in 4 KiB
+    // blocks that malloc keeps; hand them back before post-processing allocates its own.
+    malloc_trim(0);
+#endif
     ctx.throwIfCancelled();
     {
         const auto postScope = ctx.scope("post"); // always there: timing trees keep one shape
