@@ -1,6 +1,8 @@
 // CompleteBand.cc - grow the band where a zero crossing reaches its edge.
 #include "field/CompleteBand.h"
 
+#include "field/LeafBits.h"
+
 #include <openvdb/tree/LeafManager.h>
 
 #include <tbb/parallel_reduce.h>
@@ -38,48 +40,60 @@ struct FrontierFinder
     template <typename Range> void operator()(const Range& range)
     {
         ctx.checkpoint();
-        using LeafT = openvdb::FloatTree::LeafNodeType;
         openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
         openvdb::tree::ValueAccessor<openvdb::MaskTree> out(*front);
         for (auto leaf = range.begin(); leaf; ++leaf) {
             // The scanned voxels are active in tree: read their own leaf directly, others
             // through the accessor.
-            const LeafT* home = tree.probeConstLeaf(leaf->origin());
+            const FloatLeaf* home = tree.probeConstLeaf(leaf->origin());
+            const Directions dirs = frontierCandidates(*home, threshold, acc);
+            Words keep{};
+            for (const Words& d : dirs)
+                for (int x = 0; x < 8; ++x)
+                    keep[x] |= d[x];
+            if (keep == Words{}) continue;
+            const std::array<Words, 3> full = fullStencils(activeWords(*home));
             auto probe = [&](const openvdb::Coord& m, float& w) {
                 const openvdb::Coord l = m - leaf->origin();
-                if ((unsigned(l.x()) | unsigned(l.y()) | unsigned(l.z())) < LeafT::DIM) {
-                    const openvdb::Index i = LeafT::coordToOffset(l);
+                if ((unsigned(l.x()) | unsigned(l.y()) | unsigned(l.z())) < FloatLeaf::DIM) {
+                    const openvdb::Index i = FloatLeaf::coordToOffset(l);
                     w = home->getValue(i);
                     return home->isValueOn(i);
                 }
                 return acc.probeValue(m, w);
             };
-            for (auto v = leaf->cbeginValueOn(); v; ++v) {
-                const openvdb::Coord c = v.getCoord();
-                const bool in = *v < 0;
-                for (int axis = 0; axis < 3; ++axis) {
-                    for (int step : {-1, 1}) {
-                        openvdb::Coord n = c;
-                        n[axis] += step;
-                        float w;
-                        if (!probe(n, w)) {
-                            if (std::abs(*v) < threshold) out.setValueOn(n);
-                        } else if ((w < 0) != in && (bothEnds || step == 1)) {
-                            // Sign change on this edge: the 4 cells around it, 18 corners.
-                            const openvdb::Coord low = step == 1 ? c : n;
-                            const int b = (axis + 1) % 3, d = (axis + 2) % 3;
-                            for (int i = 0; i <= 1; ++i)
-                                for (int j = -1; j <= 1; ++j)
-                                    for (int k = -1; k <= 1; ++k) {
-                                        openvdb::Coord m = low;
-                                        m[axis] += i, m[b] += j, m[d] += k;
-                                        float unused;
-                                        if (!probe(m, unused)) out.setValueOn(m);
-                                    }
+            for (int x = 0; x < 8; ++x)
+                for (uint64_t bits = keep[x] & leaf->getValueMask().template getWord<uint64_t>(x);
+                     bits; bits &= bits - 1) {
+                    const int bit = __builtin_ctzll(bits);
+                    const openvdb::Coord c = leaf->origin() + openvdb::Coord(x, bit >> 3, bit & 7);
+                    const float value = home->getValue(openvdb::Index(64 * x + bit));
+                    const bool in = value < 0;
+                    for (int axis = 0; axis < 3; ++axis) {
+                        for (int step : {-1, 1}) {
+                            if (!(dirs[2 * axis + (step > 0)][x] >> bit & 1)) continue;
+                            openvdb::Coord n = c;
+                            n[axis] += step;
+                            float w;
+                            if (!probe(n, w)) {
+                                if (std::abs(value) < threshold) out.setValueOn(n);
+                            } else if ((w < 0) != in && (bothEnds || step == 1)) {
+                                if (step == 1 && (full[axis][x] >> bit & 1)) continue;
+                                // Sign change on this edge: the 4 cells around it, 18 corners.
+                                const openvdb::Coord low = step == 1 ? c : n;
+                                const int b = (axis + 1) % 3, d = (axis + 2) % 3;
+                                for (int i = 0; i <= 1; ++i)
+                                    for (int j = -1; j <= 1; ++j)
+                                        for (int k = -1; k <= 1; ++k) {
+                                            openvdb::Coord m = low;
+                                            m[axis] += i, m[b] += j, m[d] += k;
+                                            float unused;
+                                            if (!probe(m, unused)) out.setValueOn(m);
+                                        }
+                            }
                         }
                     }
                 }
-            }
         }
     }
     void join(FrontierFinder& other) { front->topologyUnion(*other.front); }
