@@ -61,6 +61,7 @@ int runMeshBench(const MeshBenchOptions& o)
             const std::string out = o.dir + "/fluidsurf_bench_mesh.obj";
             ReconstructParams rp = ReconstructParams::fromRadius(c.radius);
             rp.field.voxelSize = std::stod(v);
+            rp.keepGrids = false; // as the CLI without --vdb
             for (int k = 0; k < o.repeat; ++k) {
                 double r = 0;
                 ParticleSet loaded;

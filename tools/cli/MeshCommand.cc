@@ -346,6 +346,7 @@ Runner addReconstructCommand(CLI::App& app)
         outputs.insert(outputs.end(), vdbOutputs.begin(), vdbOutputs.end());
         refuseOverwritingInputs(inputsOf(jobs), outputs);
         ReconstructParams params = po.resolved();
+        params.keepGrids = !vdbJobs.empty(); // without --vdb it goes before post-processing
         const std::vector<std::string> gridAttributes =
             vdbJobs.empty() ? std::vector<std::string>() : params.attributes;
         if (!params.attributes.empty() && !jobs.empty() &&

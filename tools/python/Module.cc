@@ -82,6 +82,7 @@ PyMesh reconstructArrays(py::handle positions, double radius, py::handle radii,
 {
     Settings s = settingsFrom(kwargs, kAll);
     s.params.radius = checkedRadius(radius);
+    s.params.keepGrids = false; // a Mesh is returned: the grids would only raise the peak
     const ParticleSet ps = particlesFor(s, positions, radii, attributes);
     Context ctx;
     setUp(ctx, s);

@@ -113,8 +113,8 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
     RasterizeResult field =
         rasterizeParticles(particles, params.fieldParams(res.radius.radius), ctx, sourceName);
     ctx.throwIfCancelled();
-    res.levelSet = field.grid;
-    res.adaptiveGrid = field.adaptive;
+    res.levelSet = std::move(field.grid); // the result's own: see keepGrids below
+    res.adaptiveGrid = std::move(field.adaptive);
     res.isolatedParticles = std::move(field.isolatedParticles);
     res.field = std::move(field.stats);
     if (!res.adaptiveGrid.empty()) {
@@ -124,6 +124,10 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
     } else {
         res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing);
     }
+    // The finest level's voxel (the adaptive grid's level 3), for post-processing's bounds.
+    const double voxel =
+        (res.adaptiveGrid.empty() ? res.levelSet : res.adaptiveGrid.level3)->voxelSize()[0];
+    if (!params.keepGrids && res.adaptiveGrid.empty()) res.levelSet.reset();
 #ifdef __GLIBC__
     // The mesher's scratch (a topology copy of the band, per-leaf pieces) is freed in 4 KiB
     // blocks that malloc keeps; hand them back before post-processing allocates its own.
@@ -133,10 +137,7 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
     {
         const auto postScope = ctx.scope("post"); // always there: timing trees keep one shape
         PostProcessParams post = params.post;
-        // The finest level's voxel (the adaptive grid's level 3).
-        if (!(post.voxelSize > 0))
-            post.voxelSize =
-                (res.adaptiveGrid.empty() ? res.levelSet : res.adaptiveGrid.level3)->voxelSize()[0];
+        if (!(post.voxelSize > 0)) post.voxelSize = voxel;
         res.mesh = postProcessMesh(std::move(res.mesh), post, ctx, &res.post);
         if (params.post.isolated == IsolatedMode::Spheres && !res.isolatedParticles.empty()) {
             const auto t = ctx.scope("isolated spheres");

@@ -514,12 +514,14 @@ State makeState(TriangleMesh& mesh)
     // same sums every run
     const VertexTriangles around(mesh);
     s.triangles = std::move(mesh.triangles);
+    mesh.normals = {}; // not used here (the result gets new ones): 12 bytes a vertex back
     s.refused.assign(s.triangles.size(), 0);
     s.drift.assign(nv, 0.f);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v)
             s.points[v] = toVec3d(mesh.points[v]) - s.middle;
     });
+    mesh.points = {}; // s.points has them
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
             Quadric q{};

@@ -53,6 +53,25 @@ TEST(Reconstruct, EqualsItsTwoHalvesAndIsWatertight)
     EXPECT_EQ(res.isolatedSpheres, 0u);
 }
 
+TEST(Reconstruct, WithoutKeepGridsTheLevelSetGoesAndTheMeshStays)
+{
+    // keepGrids = false frees the level set before post-processing (the CLI without --vdb): the
+    // mesh, post-processed with the voxel size the level set had, is the same.
+    SceneParams sp;
+    sp.count = 20000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    ReconstructParams params = ReconstructParams::fromRadius(sp.radius);
+    Context a, b;
+    const ReconstructResult kept = reconstruct(ps, params, a);
+    params.keepGrids = false;
+    const ReconstructResult freed = reconstruct(ps, params, b);
+    ASSERT_TRUE(kept.levelSet);
+    EXPECT_FALSE(freed.levelSet);
+    EXPECT_GT(freed.post.inputTriangles, freed.mesh.triangles.size()); // it was decimated
+    EXPECT_EQ(kept.mesh.points, freed.mesh.points);
+    EXPECT_EQ(kept.mesh.triangles, freed.mesh.triangles);
+}
+
 TEST(Reconstruct, IsolatedParticlesBecomeSpheresOfTheirRadius)
 {
     SceneParams sp;
