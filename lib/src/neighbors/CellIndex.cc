@@ -1,10 +1,11 @@
-// CellIndex.cc - Morton keys, parallel sort, cell ranges.
+// CellIndex.cc - Morton keys, parallel radix sort, cell ranges.
 #include "neighbors/CellIndex.h"
+
+#include "util/RadixSort.h"
 
 #include <fluidsurf/Error.h>
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -29,10 +30,6 @@ struct Handle // the thesis' "handler": cell key and particle id
 {
     uint64_t key;
     uint32_t index;
-    bool operator<(const Handle& o) const
-    {
-        return key < o.key || (key == o.key && index < o.index);
-    }
 };
 } // namespace
 
@@ -129,7 +126,12 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
                 handles[i] = {mortonKey(c[0], c[1], c[2]), uint32_t(i)};
             }
         });
-    tbb::parallel_sort(handles.begin(), handles.end());
+    // by key, stably: the handles are in index order, so this is the sort by (key, index)
+    int axisBits = 0;
+    while (axisBits < 21 &&
+           (uint64_t(1) << axisBits) < std::max({index.dims[0], index.dims[1], index.dims[2]}))
+        ++axisBits;
+    util::radixSortStable(handles, 3 * axisBits, [](const Handle& h) { return h.key; });
 
     index.positions.resize(n);
     index.order.resize(n);

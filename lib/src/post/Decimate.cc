@@ -53,6 +53,7 @@
 #include "post/Quadric.h"
 #include "post/StepGuard.h"
 
+#include "util/RadixSort.h"
 #include "util/TriangleDistance.h"
 
 #include <fluidsurf/MeshCheck.h>
@@ -548,8 +549,8 @@ struct Blocks
 Blocks sortIntoBlocks(const State& s, double side, double shift)
 {
     const size_t n = s.triangles.size();
-    std::vector<uint64_t> keys(n), other(n); // (block, triangle)
-    constexpr int kBits = 10, kAxes = 3;     // 10 bits an axis: 1,024 blocks across is plenty
+    std::vector<uint64_t> keys(n);       // (block, triangle)
+    constexpr int kBits = 10, kAxes = 3; // 10 bits an axis: 1,024 blocks across is plenty
     constexpr uint32_t kMask = (1u << kBits) - 1;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t) {
@@ -562,38 +563,9 @@ Blocks sortIntoBlocks(const State& s, double side, double shift)
             keys[t] = key << 32 | t;
         }
     });
-    // a stable radix sort on the block, ten bits a round: the triangles are already in order,
-    // so this is the sort by (block, triangle) that a comparison sort took three times as long
-    // for. Parallel over fixed chunks: each counts its digits, then writes its keys, in order,
-    // from where the digit's earlier chunks end (stable, the same for any thread count; serial,
-    // the passes' sorts were a tenth of the decimation on 16 cores).
-    constexpr size_t kChunk = size_t(1) << 16;
-    const size_t chunks = (n + kChunk - 1) / kChunk;
-    std::vector<size_t> at(chunks << kBits);
-    for (int round = 0; round < kAxes && n > 0; ++round) {
-        const int shiftBits = 32 + kBits * round;
-        std::fill(at.begin(), at.end(), size_t(0));
-        tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-            size_t* count = &at[c << kBits];
-            for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
-                ++count[keys[i] >> shiftBits & kMask];
-        });
-        size_t sum = 0;
-        const size_t first = keys[0] >> shiftBits & kMask;
-        for (size_t c = 0; c < chunks; ++c)
-            sum += at[c << kBits | first];
-        if (sum == n) continue; // one digit for all
-        sum = 0;
-        for (size_t d = 0; d <= kMask; ++d)
-            for (size_t c = 0; c < chunks; ++c)
-                sum += std::exchange(at[c << kBits | d], sum);
-        tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-            size_t* to = &at[c << kBits];
-            for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
-                other[to[keys[i] >> shiftBits & kMask]++] = keys[i];
-        });
-        keys.swap(other);
-    }
+    // by block, stably: the triangles are already in order, so this is the sort by (block,
+    // triangle)
+    util::radixSortStable(keys, kBits * kAxes, [](uint64_t k) { return k >> 32; });
     Blocks b;
     b.tris.resize(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
