@@ -80,9 +80,16 @@ Voxels referenceComplete(Voxels band, const std::map<openvdb::Coord, float>& til
     }
 }
 
-Voxels runStage(const Voxels& band, openvdb::FloatTree& tree,
-                float (*value)(const openvdb::Coord&) = phi)
+/// The stage on `band` (plus an active leaf-sized tile of value -1 at tileOrigin, if given):
+/// the voxels active in leaves afterwards.
+Voxels runStage(const Voxels& band, float (*value)(const openvdb::Coord&) = phi,
+                const openvdb::Coord* tileOrigin = nullptr)
 {
+    openvdb::FloatTree tree(1e3f);
+    if (tileOrigin) {
+        tree.addTile(1, *tileOrigin, -1.f, true);
+        EXPECT_EQ(tree.activeTileCount(), 1u);
+    }
     for (const auto& [c, v] : band)
         tree.setValueOn(c, v);
     Level level;
@@ -103,6 +110,16 @@ Voxels runStage(const Voxels& band, openvdb::FloatTree& tree,
     return out;
 }
 
+void expectSame(const Voxels& expected, const Voxels& got)
+{
+    ASSERT_EQ(got.size(), expected.size());
+    for (const auto& [c, v] : expected) {
+        const auto it = got.find(c);
+        ASSERT_TRUE(it != got.end()) << "missing " << c;
+        EXPECT_EQ(it->second, v) << c;
+    }
+}
+
 } // namespace
 
 TEST(CompleteBand, AddsWhatTheRuleAddsAndNothingElse)
@@ -110,14 +127,7 @@ TEST(CompleteBand, AddsWhatTheRuleAddsAndNothingElse)
     const Voxels band = startBand();
     const Voxels expected = referenceComplete(band, {});
     ASSERT_GT(expected.size(), band.size() + 1000); // the test has something to complete
-    openvdb::FloatTree tree(1e3f);
-    const Voxels got = runStage(band, tree);
-    ASSERT_EQ(got.size(), expected.size());
-    for (const auto& [c, v] : expected) {
-        const auto it = got.find(c);
-        ASSERT_TRUE(it != got.end()) << "missing " << c;
-        EXPECT_EQ(it->second, v) << c;
-    }
+    expectSame(expected, runStage(band));
 }
 
 TEST(CompleteBand, EachLoneCrossingGetsItsCellsAtEveryPlaceInALeaf)
@@ -147,14 +157,7 @@ TEST(CompleteBand, EachLoneCrossingGetsItsCellsAtEveryPlaceInALeaf)
     auto outside = [](const openvdb::Coord&) { return 5.f; }; // far outside: no new near voxels
     const Voxels expected = referenceComplete(band, {}, outside);
     ASSERT_GT(expected.size(), band.size() + 10000);
-    openvdb::FloatTree tree(1e3f);
-    const Voxels got = runStage(band, tree, outside);
-    ASSERT_EQ(got.size(), expected.size());
-    for (const auto& [c, v] : expected) {
-        const auto it = got.find(c);
-        ASSERT_TRUE(it != got.end()) << "missing " << c;
-        EXPECT_EQ(it->second, v) << c;
-    }
+    expectSame(expected, runStage(band, outside));
 }
 
 TEST(CompleteBand, ReadsAnActiveTileAsActiveVoxels)
@@ -173,30 +176,5 @@ TEST(CompleteBand, ReadsAnActiveTileAsActiveVoxels)
     for (const auto& [c, v] : band)
         if (!tile.count(c)) start[c] = v;
     const Voxels expected = referenceComplete(start, tile);
-
-    openvdb::FloatTree tree(1e3f);
-    tree.addTile(1, tileOrigin, -1.f, true);
-    for (const auto& [c, v] : start)
-        tree.setValueOn(c, v);
-    ASSERT_EQ(tree.activeTileCount(), 1u);
-    Level level;
-    level.voxelSize = 1;
-    Context ctx;
-    field::completeBand(
-        tree, level,
-        [](openvdb::FloatTree& grown) {
-            for (auto it = grown.beginValueOn(); it; ++it)
-                it.setValue(phi(it.getCoord()));
-        },
-        ctx);
-    Voxels got;
-    for (auto it = tree.cbeginLeaf(); it; ++it)
-        for (auto v = it->cbeginValueOn(); v; ++v)
-            got[v.getCoord()] = *v;
-    ASSERT_EQ(got.size(), expected.size());
-    for (const auto& [c, v] : expected) {
-        const auto it = got.find(c);
-        ASSERT_TRUE(it != got.end()) << "missing " << c;
-        EXPECT_EQ(it->second, v) << c;
-    }
+    expectSame(expected, runStage(start, phi, &tileOrigin));
 }
