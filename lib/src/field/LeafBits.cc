@@ -1,6 +1,8 @@
 // LeafBits.cc - see LeafBits.h.
 #include "field/LeafBits.h"
 
+#include "util/LeafWords.h"
+
 #include <cmath>
 
 namespace fluidsurf {
@@ -8,6 +10,8 @@ namespace field {
 
 namespace {
 using LeafT = FloatLeaf;
+using util::kZ0;
+using util::kZ7;
 
 /// Bits of one leaf: its active voxels, the negative ones and those with |phi| < threshold.
 struct LeafBits
@@ -25,16 +29,15 @@ Words activeOf(const LeafT& leaf)
 
 LeafBits leafBits(const LeafT& leaf, float threshold)
 {
+    const util::LeafWords words(leaf);
     LeafBits b;
     const float* v = leaf.buffer().data();
     for (int x = 0; x < 8; ++x) {
-        b.active[x] = leaf.getValueMask().getWord<uint64_t>(x);
-        uint64_t neg = 0, near = 0;
-        for (int i = 0; i < 64; ++i) {
-            neg |= uint64_t(v[64 * x + i] < 0) << i;
+        b.active[x] = words.active[x], b.negative[x] = words.in[x];
+        uint64_t near = 0;
+        for (int i = 0; i < 64; ++i)
             near |= uint64_t(std::abs(v[64 * x + i]) < threshold) << i;
-        }
-        b.negative[x] = neg, b.near[x] = near;
+        b.near[x] = near;
     }
     return b;
 }
@@ -43,7 +46,6 @@ LeafBits leafBits(const LeafT& leaf, float threshold)
 /// or 1 (0 where that neighbour lies outside the leaf).
 Words shifted(const Words& w, int dx, int dy, int dz)
 {
-    constexpr uint64_t kZ0 = 0x0101010101010101ull, kZ7 = kZ0 << 7;
     Words out{};
     for (int x = 0; x < 8; ++x) {
         if (x + dx < 0 || x + dx > 7) continue;
@@ -119,7 +121,6 @@ Directions frontierCandidates(const FloatLeaf& home, float threshold,
             out[dir][x] = own.active[x] & ((own.near[x] & ~active[x]) |
                                            (active[x] & (own.negative[x] ^ negative[x])));
     };
-    constexpr uint64_t kZ0 = 0x0101010101010101ull, kZ7 = kZ0 << 7; // bits with z = 0, z = 7
     for (int axis = 0; axis < 3; ++axis)
         for (int step : {-1, 1}) {
             openvdb::Coord o = home.origin();

@@ -1,7 +1,7 @@
-// LeafBits.h - a FloatTree leaf's voxels as 8 words of 64 bits (word x, bit y * 8 + z), for the
-// band completion's frontier scan (CompleteBand.cc): which voxels can find anything, and which
-// edges have all the corners of their 4 cells active, decided a leaf at a time with word
-// operations instead of probing the 6 neighbours of every voxel of the band.
+// LeafBits.h - a FloatTree leaf's voxels as 8 words of 64 bits (util/LeafWords.h: word x, bit
+// y * 8 + z), for the band completion's frontier scan (CompleteBand.cc): which voxels can find
+// anything, and which edges have all the corners of their 4 cells active, decided a leaf at a
+// time with word operations instead of probing the 6 neighbours of every voxel of the band.
 #pragma once
 
 #include <openvdb/openvdb.h>

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "mesh/Gradient.h"
+#include "util/LeafWords.h"
 
 #include <openvdb/openvdb.h>
 
@@ -15,27 +16,14 @@ namespace mesh {
 
 using FloatLeaf = openvdb::FloatTree::LeafNodeType;
 
-/// A leaf's active and inside (phi < 0) voxels as 8 words of 64 bits: word x, bit y * 8 + z
-/// (OpenVDB's leaf order). Cells and edges that stay inside the leaf are then found for 64
-/// (y, z) positions at once.
-struct LeafBits
-{
-    uint64_t active[8] = {}, in[8] = {};
-    LeafBits() = default; // no leaf: nothing active
-    explicit LeafBits(const FloatLeaf& leaf)
-    {
-        const auto& mask = leaf.getValueMask();
-        for (int x = 0; x < 8; ++x)
-            active[x] = mask.template getWord<uint64_t>(x), in[x] = 0;
-        const float* v = leaf.buffer().data();
-        for (int i = 0; i < 512; ++i)
-            in[i >> 6] |= uint64_t(v[i] < 0) << (i & 63);
-    }
-};
-constexpr uint64_t kZBelow7 = 0x7F7F7F7F7F7F7F7FULL; // bits with z < 7
-constexpr uint64_t kYBelow7 = 0x00FFFFFFFFFFFFFFULL; // bits with y < 7
-constexpr uint64_t kZ0 = 0x0101010101010101ULL;      // bits with z = 0
-constexpr uint64_t kZ7 = kZ0 << 7, kY7 = 0xFFULL << 56;
+/// A leaf's active and inside (phi < 0) voxels as bit words (util/LeafWords.h). Cells and edges
+/// that stay inside the leaf are found for 64 (y, z) positions at once.
+using LeafBits = util::LeafWords;
+using util::kY7;
+using util::kYBelow7;
+using util::kZ0;
+using util::kZ7;
+using util::kZBelow7;
 // Two planes of one x side by side in one word, so squareAll/Any see cells across a leaf face:
 // this leaf's row y = 7 as row 0 and the +y neighbour's row 0 as row 1; or column z = 7 as
 // column 0 and the +z neighbour's column 0 as column 1.

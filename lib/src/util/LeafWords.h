@@ -1,0 +1,35 @@
+// LeafWords.h - a VDB float leaf's voxels as 8 words of 64 bits: word x, bit y * 8 + z (OpenVDB's
+// leaf order). Neighbours along z are adjacent bits, along y 8 bits apart, along x the next
+// word, so that edges and cells are tested 64 at a time: marching cubes (mesh/LeafBits.h) and
+// band completion's frontier scan (field/LeafBits.h).
+#pragma once
+
+#include <openvdb/openvdb.h>
+
+#include <cstdint>
+
+namespace fluidsurf {
+namespace util {
+
+/// A leaf's active and inside (phi < 0) voxels.
+struct LeafWords
+{
+    uint64_t active[8] = {}, in[8] = {};
+    LeafWords() = default; // no leaf: nothing active
+    explicit LeafWords(const openvdb::FloatTree::LeafNodeType& leaf)
+    {
+        const auto& mask = leaf.getValueMask();
+        for (int x = 0; x < 8; ++x)
+            active[x] = mask.template getWord<uint64_t>(x), in[x] = 0;
+        const float* v = leaf.buffer().data();
+        for (int i = 0; i < 512; ++i)
+            in[i >> 6] |= uint64_t(v[i] < 0) << (i & 63);
+    }
+};
+constexpr uint64_t kZBelow7 = 0x7F7F7F7F7F7F7F7FULL; // bits with z < 7
+constexpr uint64_t kYBelow7 = 0x00FFFFFFFFFFFFFFULL; // bits with y < 7
+constexpr uint64_t kZ0 = 0x0101010101010101ULL;      // bits with z = 0
+constexpr uint64_t kZ7 = kZ0 << 7, kY7 = 0xFFULL << 56;
+
+} // namespace util
+} // namespace fluidsurf
