@@ -1,0 +1,456 @@
+// DecimateBlock.h - one block's greedy edge collapses for the parallel decimation (Decimate.cc,
+// which cuts the mesh into blocks and runs the passes), and the mesh state the blocks share.
+// Only Decimate.cc includes it.
+//
+// Each collapse moves the edge to the point of least quadric error (not to one of its ends, as
+// OpenMesh does): the error is measured against the original triangles' planes, which averages
+// out the particles' bumps on flat fluid. Guards refuse a collapse that would
+// - break manifoldness: the ends must share exactly the two neighbours across the edge (the
+//   link condition), and no vertex may be left with fewer than three triangles;
+// - turn a remaining triangle's normal by more than kMaxTurnDegrees (a fold or flip);
+// - leave a triangle with an angle under kThinAngleDegrees (MeshCheck.h: what checkMesh counts
+//   as thin) that was not already thinner (slivers);
+// - carry a vertex farther from the input than DecimateTarget::maxDrift (see State::drift);
+// - move the surface by more than DecimateTarget::maxStep, either way (post/StepGuard: the new
+//   point, the old ends and triangle middles, and the new edges' middles).
+// The shape guards run first: they refuse nine collapses in ten of those refused, and cheaply.
+//
+// A refusal is remembered across passes (State::refused): the guards read only the two ends'
+// fans, so an edge refused once is refused again until a collapse changes a fan it reads (a
+// collapse's vertex and its neighbours are "touched"). Near a count target the cheapest edges
+// left are mostly refused ones; without the memory, every late pass tried them all again (15
+// passes of 0.03-0.3 s for 9,000 collapses on the t0.50 1.69M frame). A remembered edge is
+// left out of its block's heap and put in only when a collapse touches an end while the heap
+// still holds the edge in pop order (Block::touch): the collapses made are the same, in the
+// same order, as with every edge in the heap.
+#pragma once
+
+#include "post/Quadric.h"
+#include "post/StepGuard.h"
+
+#include <fluidsurf/Mesh.h>
+#include <fluidsurf/MeshCheck.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <queue>
+#include <vector>
+
+namespace fluidsurf {
+namespace post {
+namespace detail {
+
+using Tri = std::array<uint32_t, 3>;
+
+constexpr double kMaxTurnDegrees = 60; ///< the most a remaining triangle's normal may turn
+constexpr size_t kMaxFan = 64;         ///< vertices with more triangles are left alone
+constexpr uint32_t kNone = UINT32_MAX;
+
+inline const double kMaxTurnCos = std::cos(kMaxTurnDegrees * M_PI / 180);
+inline const double kMaxTurnCos2 = kMaxTurnCos * kMaxTurnCos; ///< the turn guard compares squares
+/// sin^2 of the smallest angle the thin guard lets a new triangle have: a triangle's smallest
+/// angle (<= 60 deg) has sin^2 = |n|^2 shortest^2 / (a^2 b^2 c^2), |n| twice its area.
+inline const double kThinSin2 = std::pow(std::sin(kThinAngleDegrees * M_PI / 180), 2);
+
+/// The whole mesh between passes, points relative to the middle of its bounds so that the
+/// quadrics' constants stay small and their errors exact to many digits.
+struct State
+{
+    Vec3d middle{0.0}; ///< of the input's bounds
+    std::vector<Vec3d> points;
+    std::unique_ptr<Quadric[]> quadrics; ///< one a point (see makeState)
+    /// How far each vertex may be from the input surface it stands for: 0 for an input vertex;
+    /// a collapse adds its point's largest distance to the planes of the triangles it replaces
+    /// to the larger drift of its two ends (an upper bound along the normals, where the
+    /// quadric's mean can hide a tip pulled in by a few voxels).
+    std::vector<float> drift;
+    std::vector<Tri> triangles;
+    /// Per triangle, bit k: its edge (t[k], t[k + 1]) was refused, and no collapse has touched
+    /// either end since (see the top of the file).
+    std::vector<uint8_t> refused;
+};
+
+struct Collapse
+{
+    Vec3d point;
+    double error; ///< area-weighted mean squared distance to the planes
+};
+
+inline Collapse bestCollapse(const State& s, uint32_t a, uint32_t b)
+{
+    const Quadric q = s.quadrics[a] + s.quadrics[b];
+    const Vec3d p = q.minimizer((s.points[a] + s.points[b]) * 0.5);
+    return {p, q.w > 0 ? q.error(p) / q.w : 0.0};
+}
+
+struct BlockResult
+{
+    std::vector<Tri> triangles;      ///< what is left of the block's triangles
+    std::vector<uint8_t> remembered; ///< theirs (State::refused)
+    /// Vertices the block does not own that its collapses touched: their remembered refusals
+    /// in other blocks are forgotten after the pass.
+    std::vector<uint32_t> touched;
+    size_t collapses = 0, refused = 0;
+    double maxError = 0, maxDrift = 0;
+};
+
+/// One block's greedy collapses (see the top of the file). Reads the points and quadrics of
+/// every vertex of its triangles, writes only those of the vertices it owns.
+class Block
+{
+public:
+    /// `localOf`: one per thread, as long as the mesh's points, all kNone, and left so.
+    Block(State& s, const uint32_t* tris, size_t n, const std::vector<uint32_t>& valence,
+          std::vector<uint32_t>& localOf)
+        : mS(s)
+    {
+        // local vertices in the order they first appear in the block's triangles (which are in
+        // mesh order): the same numbering every run, without a sort
+        mTris.resize(n);
+        mRefused.resize(n);
+        for (size_t i = 0; i < n; ++i) {
+            mRefused[i] = s.refused[tris[i]];
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t v = s.triangles[tris[i]][k];
+                if (localOf[v] == kNone) {
+                    localOf[v] = uint32_t(mGlobal.size());
+                    mGlobal.push_back(v);
+                }
+                mTris[i][k] = localOf[v];
+            }
+        }
+        for (uint32_t v : mGlobal)
+            localOf[v] = kNone;
+        const size_t nv = mGlobal.size();
+        mTriAlive.assign(n, 1);
+        mStart.assign(nv + 1, 0);
+        for (const Tri& t : mTris)
+            for (uint32_t v : t)
+                ++mStart[v + 1];
+        for (size_t v = 0; v < nv; ++v)
+            mStart[v + 1] += mStart[v];
+        mCount.resize(nv);
+        for (size_t v = 0; v < nv; ++v)
+            mCount[v] = mStart[v + 1] - mStart[v];
+        mRefs.resize(3 * n);
+        std::vector<uint32_t> fill(mStart.begin(), mStart.end() - 1);
+        for (size_t t = 0; t < n; ++t)
+            for (uint32_t v : mTris[t])
+                mRefs[fill[v]++] = uint32_t(t);
+        mStart.pop_back();
+        mOwn.resize(nv);
+        for (size_t v = 0; v < nv; ++v)
+            mOwn[v] = mCount[v] == valence[mGlobal[v]] && isClosedFan(uint32_t(v));
+        mVersion.assign(nv, 0);
+        mMark.assign(nv, 0);
+    }
+
+    BlockResult run(double threshold, const DecimateTarget& target, size_t budget)
+    {
+        BlockResult out;
+        mThreshold = threshold, mMaxDrift = target.maxDrift, mMaxStep = target.maxStep;
+        mStep = StepGuard(mMaxStep);
+        std::vector<Entry> entries; // made a heap at once: cheaper than pushing one by one
+        entries.reserve(3 * mTris.size() / 2);
+        for (size_t t = 0; t < mTris.size(); ++t)
+            for (int k = 0; k < 3; ++k) // each inner edge once, from its lower end
+                if (mTris[t][k] < mTris[t][(k + 1) % 3] && !(mRefused[t] >> k & 1))
+                    push(mTris[t][k], mTris[t][(k + 1) % 3], &entries);
+        mHeap = std::priority_queue<Entry>(std::less<Entry>(), std::move(entries));
+        mPopped = false;
+        while (!mHeap.empty() && out.collapses < budget) {
+            const Entry e = mHeap.top();
+            mHeap.pop();
+            if (popsAfterLast(e)) mLast = e, mPopped = true;
+            const uint32_t a = uint32_t(e.key);
+            if (mVersion[a] + mVersion[e.b] != e.versions) continue; // stale: an end changed
+            double error = 0;
+            const Outcome o = collapse(a, e.b, error);
+            if (o == Outcome::Collapsed) {
+                ++out.collapses;
+                out.maxError = std::max(out.maxError, error);
+                out.maxDrift = std::max(out.maxDrift, double(mS.drift[mGlobal[a]]));
+                for (uint32_t w : mRing) // after collapse(): touch() walks with mMark too
+                    touch(w, a, out.touched);
+            } else {
+                ++out.refused;
+            }
+        }
+        for (size_t t = 0; t < mTris.size(); ++t)
+            if (mTriAlive[t]) {
+                out.triangles.push_back(
+                    {mGlobal[mTris[t][0]], mGlobal[mTris[t][1]], mGlobal[mTris[t][2]]});
+                out.remembered.push_back(mRefused[t]);
+            }
+        return out;
+    }
+
+private:
+    /// 16 bytes, one integer compare as a rule: the heap's sifting is a tenth of the work.
+    struct Entry
+    {
+        /// the error as a float (its bits order like the value: it is >= 0), then the lower
+        /// end: the heap's top is the smallest error, ties to the lowest ends, one order every run
+        uint64_t key;
+        uint32_t b;
+        uint32_t versions; ///< the ends' versions added up when pushed: they only grow
+        bool operator<(const Entry& o) const { return key != o.key ? key > o.key : b > o.b; }
+    };
+
+    enum class Outcome {
+        Collapsed,
+        Refused,         ///< by the ends' fans alone: remembered (State::refused)
+        RefusedUnstable, ///< by what lies outside the fans too: tried again next time
+    };
+
+    Vec3d& point(uint32_t v) { return mS.points[mGlobal[v]]; }
+    const Vec3d& point(uint32_t v) const { return mS.points[mGlobal[v]]; }
+
+    void aliveTris(uint32_t v, std::vector<uint32_t>& out) const
+    {
+        out.clear();
+        for (uint32_t i = mStart[v]; i < mStart[v] + mCount[v]; ++i)
+            if (mTriAlive[mRefs[i]]) out.push_back(mRefs[i]);
+    }
+
+    /// v's triangles go once around it, a disc: each triangle's far side leads to the next.
+    bool isClosedFan(uint32_t v)
+    {
+        const uint32_t n = mCount[v];
+        if (n < 3 || n > kMaxFan) return false;
+        uint32_t from[kMaxFan], to[kMaxFan];
+        for (uint32_t i = 0; i < n; ++i) {
+            const Tri& t = mTris[mRefs[mStart[v] + i]];
+            const int k = t[0] == v ? 0 : t[1] == v ? 1 : 2;
+            from[i] = t[(k + 1) % 3], to[i] = t[(k + 2) % 3];
+        }
+        uint32_t cur = from[0];
+        uint64_t seen = 0;
+        for (uint32_t step = 0; step < n; ++step) {
+            uint32_t i = 0;
+            while (i < n && from[i] != cur)
+                ++i;
+            if (i == n || (seen >> i & 1)) return false; // the fan is open, or not one fan
+            seen |= uint64_t(1) << i;
+            cur = to[i];
+            if ((cur == from[0]) != (step == n - 1)) return false; // back too soon or never
+        }
+        return true;
+    }
+
+    /// The heap entry of edge (a, b), if it belongs in the heap.
+    bool entry(uint32_t a, uint32_t b, Entry& e) const
+    {
+        if (!mOwn[a] || !mOwn[b]) return false;
+        if (a > b) std::swap(a, b);
+        const Collapse c = bestCollapse(mS, mGlobal[a], mGlobal[b]);
+        if (!(c.error <= mThreshold)) return false;
+        const float error = float(c.error);
+        uint32_t bits;
+        std::memcpy(&bits, &error, sizeof bits);
+        e = Entry{uint64_t(bits) << 32 | a, b, mVersion[a] + mVersion[b]};
+        return true;
+    }
+
+    void push(uint32_t a, uint32_t b, std::vector<Entry>* entries = nullptr)
+    {
+        Entry e;
+        if (entry(a, b, e)) entries ? entries->push_back(e) : mHeap.push(e);
+    }
+
+    /// e comes after every entry popped so far (the heap's order: the top is the largest).
+    bool popsAfterLast(const Entry& e) const { return !mPopped || e < mLast; }
+
+    /// Remembers the refusal of edge (a, b) on both its triangles.
+    Outcome refuse(uint32_t a, uint32_t b, const uint32_t (&shared)[2])
+    {
+        for (uint32_t t : shared)
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t p = mTris[t][k], q = mTris[t][(k + 1) % 3];
+                if ((p == a && q == b) || (p == b && q == a)) mRefused[t] |= uint8_t(1 << k);
+            }
+        return Outcome::Refused;
+    }
+
+    /// A collapse into `a` changed u's fan: u's remembered refusals no longer hold. Those the
+    /// heap would still hold, had they been in it (after the last entry popped), go in now; the
+    /// edges to `a` are in already. `touched` gets u if the block does not own it.
+    void touch(uint32_t u, uint32_t a, std::vector<uint32_t>& touched)
+    {
+        if (!mOwn[u]) {
+            touched.push_back(mGlobal[u]);
+            return;
+        }
+        const uint32_t stamp = ++mStamp;
+        for (uint32_t i = mStart[u]; i < mStart[u] + mCount[u]; ++i) {
+            const uint32_t t = mRefs[i];
+            if (!mTriAlive[t] || !mRefused[t]) continue;
+            for (int k = 0; k < 3; ++k) {
+                const uint32_t p = mTris[t][k], q = mTris[t][(k + 1) % 3];
+                if (!(mRefused[t] >> k & 1) || (p != u && q != u)) continue;
+                mRefused[t] &= uint8_t(~(1 << k));
+                const uint32_t v = p == u ? q : p;
+                if (v == a || mMark[v] == stamp) continue;
+                mMark[v] = stamp;
+                Entry e;
+                if (entry(u, v, e) && popsAfterLast(e)) mHeap.push(e);
+            }
+        }
+    }
+
+    Outcome collapse(uint32_t a, uint32_t b, double& error)
+    {
+        aliveTris(a, mTa);
+        aliveTris(b, mTb);
+        uint32_t shared[2], opposite[2], nShared = 0;
+        for (uint32_t t : mTa) {
+            const Tri& tri = mTris[t];
+            if (tri[0] != b && tri[1] != b && tri[2] != b) continue;
+            if (nShared == 2) return Outcome::RefusedUnstable; // a non-manifold edge
+            shared[nShared] = t;
+            opposite[nShared++] = tri[0] ^ tri[1] ^ tri[2] ^ a ^ b;
+        }
+        if (nShared != 2) return Outcome::RefusedUnstable;
+        const Collapse col = bestCollapse(mS, mGlobal[a], mGlobal[b]);
+        // the shapes first: they refuse most collapses (nine in ten refused), and cheaply: in
+        // squares, without roots. Each remaining triangle of v's fan is (v, u, w) in its own
+        // order, with only v moving, from x to the new point q.
+        const Vec3d& q = col.point;
+        for (const uint32_t v : {a, b}) {
+            const Vec3d x = point(v);
+            for (uint32_t t : v == a ? mTa : mTb) {
+                if (t == shared[0] || t == shared[1]) continue;
+                const Tri& tri = mTris[t];
+                const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+                const Vec3d& u = point(tri[(k + 1) % 3]);
+                const Vec3d& w = point(tri[(k + 2) % 3]);
+                const Vec3d n0 = (u - x).cross(w - x), n1 = (u - q).cross(w - q);
+                const double turn = n0.dot(n1), l0 = n0.lengthSqr(), l1 = n1.lengthSqr();
+                if (!(l1 > 0) || turn < 0 || turn * turn < kMaxTurnCos2 * l0 * l1)
+                    return refuse(a, b, shared);
+                // an angle under kThinAngleDegrees, smaller than it was (see kThinSin2)
+                const double uw = (u - w).lengthSqr(), uq = (u - q).lengthSqr(),
+                             wq = (w - q).lengthSqr();
+                const double sides1 = uw * uq * wq, short1 = std::min({uw, uq, wq});
+                if (l1 * short1 < kThinSin2 * sides1) {
+                    const double ux = (u - x).lengthSqr(), wx = (w - x).lengthSqr();
+                    const double sides0 = uw * ux * wx, short0 = std::min({uw, ux, wx});
+                    if (l1 * short1 * sides0 < l0 * short0 * sides1) return refuse(a, b, shared);
+                }
+            }
+        }
+        // the topology: the ends' neighbours, marked with stamps (no sorting)
+        const uint32_t markA = ++mStamp, markB = ++mStamp;
+        size_t na = 0, nb = 0, common = 0; // b is a's neighbour and a b's
+        for (uint32_t t : mTa)
+            for (uint32_t w : mTris[t])
+                if (w != a && mMark[w] != markA) mMark[w] = markA, ++na;
+        for (uint32_t t : mTb)
+            for (uint32_t w : mTris[t]) {
+                if (w == b || mMark[w] == markB) continue;
+                common += mMark[w] == markA;
+                mMark[w] = markB, ++nb;
+            }
+        if (common != 2) return refuse(a, b, shared);     // the link condition
+        if (na + nb - 4 < 3) return refuse(a, b, shared); // a's fan after the collapse
+        for (uint32_t c : opposite) { // each loses one triangle (c's fan: not remembered)
+            aliveTris(c, mTc);
+            if (mTc.size() - 1 < (mOwn[c] ? 3u : 2u)) return Outcome::RefusedUnstable;
+        }
+        // how far the surface moves: the drift bound, and the fans for withinStep
+        const bool stepBound = mMaxStep < std::numeric_limits<double>::infinity();
+        double drift = 0; // see State::drift
+        // (a plane of the old fan is as far off the input as its corners may be)
+        auto far = [&](const Tri& t) {
+            return double(std::max(
+                {mS.drift[mGlobal[t[0]]], mS.drift[mGlobal[t[1]]], mS.drift[mGlobal[t[2]]]}));
+        };
+        auto driftTo = [&](const Vec3d& x, const Vec3d& u, const Vec3d& w, const Tri& t) {
+            const Vec3d n0 = (u - x).cross(w - x);
+            const double l0 = n0.length();
+            if (l0 > 0) drift = std::max(drift, std::abs(n0.dot(q - x)) / l0 + far(t));
+        };
+        mStep.start(q);
+        // the two that go, first (see StepGuard): each a segment from q to its far corner now
+        for (int g = 0; g < 2; ++g) {
+            const Tri& tri = mTris[shared[g]];
+            const Vec3d &x = point(tri[0]), &u = point(tri[1]), &w = point(tri[2]);
+            driftTo(x, u, w, tri);
+            if (stepBound) mStep.addGone(tri, x, u, w, opposite[g], point(opposite[g]));
+        }
+        // the others, (v, u, w) with only v moving from x to q
+        for (const uint32_t v : {a, b}) {
+            if (v == b) mStep.startSecondFan();
+            const Vec3d x = point(v);
+            for (uint32_t t : v == a ? mTa : mTb) {
+                if (t == shared[0] || t == shared[1]) continue;
+                const Tri& tri = mTris[t];
+                const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
+                const Tri ids{v, tri[(k + 1) % 3], tri[(k + 2) % 3]};
+                const Vec3d &u = point(ids[1]), &w = point(ids[2]);
+                driftTo(x, u, w, tri);
+                if (stepBound) mStep.addMoved(ids, x, u, w);
+            }
+        }
+        if (drift > mMaxDrift) return refuse(a, b, shared);
+        if (stepBound && !mStep.accepts(point(a), point(b))) return refuse(a, b, shared);
+        error = col.error;
+
+        // commit: b merges into a
+        point(a) = col.point;
+        mS.drift[mGlobal[a]] = float(drift);
+        mS.quadrics[mGlobal[a]] += mS.quadrics[mGlobal[b]];
+        mTriAlive[shared[0]] = mTriAlive[shared[1]] = 0;
+        const uint32_t start = uint32_t(mRefs.size());
+        for (uint32_t t : mTa)
+            if (t != shared[0] && t != shared[1]) mRefs.push_back(t);
+        for (uint32_t t : mTb) {
+            if (t == shared[0] || t == shared[1]) continue;
+            for (uint32_t& v : mTris[t])
+                if (v == b) v = a;
+            mRefs.push_back(t);
+        }
+        mStart[a] = start, mCount[a] = uint32_t(mRefs.size()) - start;
+        mCount[b] = 0;
+        ++mVersion[a], ++mVersion[b], mOwn[b] = 0;
+        aliveTris(a, mTa);
+        const uint32_t mark = ++mStamp;
+        mRing.clear();
+        for (uint32_t t : mTa) {
+            for (uint32_t w : mTris[t])
+                if (w != a && mMark[w] != mark) mMark[w] = mark, mRing.push_back(w), push(a, w);
+            for (int k = 0; k < 3; ++k) // a's own edges are all in the heap again
+                if (mTris[t][k] == a || mTris[t][(k + 1) % 3] == a)
+                    mRefused[t] &= uint8_t(~(1 << k));
+        }
+        return Outcome::Collapsed;
+    }
+
+    State& mS;
+    std::vector<uint32_t> mGlobal; ///< local vertex -> mesh vertex
+    std::vector<Tri> mTris;        ///< in local vertices
+    std::vector<uint8_t> mTriAlive, mOwn;
+    std::vector<uint8_t> mRefused;               ///< State::refused, per local triangle
+    std::vector<uint32_t> mStart, mCount, mRefs; ///< vertex -> its triangles (lists grow at
+                                                 ///< the end of mRefs as vertices merge)
+    std::vector<uint32_t> mVersion;              ///< bumped when a vertex moves or goes
+    std::priority_queue<Entry> mHeap;
+    double mThreshold = 0, mMaxDrift = 0, mMaxStep = 0;
+    StepGuard mStep{0};          ///< the fans of the collapse being tried (DecimateTarget::maxStep)
+    std::vector<uint32_t> mMark; ///< per vertex: the stamp of the last neighbour walk it was in
+    uint32_t mStamp = 0;
+    std::vector<uint32_t> mTa, mTb, mTc; // scratch
+    std::vector<uint32_t> mRing;         ///< the last collapse's vertex' neighbours
+    Entry mLast{};                       ///< the last entry popped in heap order (see touch)
+    bool mPopped = false;
+};
+
+} // namespace detail
+} // namespace post
+} // namespace fluidsurf
