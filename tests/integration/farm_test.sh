@@ -38,6 +38,23 @@ check "--keep-going: the summary" grep -q "reconstruct 6 frames: 5 done, 0 skipp
 check "--keep-going: the error at once, then the list" bash -c "grep -q 'error: f_0004.bgeo: header promises.*(left out: --keep-going)' k.err && grep -A1 '1 frame failed:' k.err | grep -q '^  f_0004.bgeo$'"
 check "--keep-going: every frame's mesh watertight" bash -c "for f in 1 2 3 5 6; do '$BIN' info k_000\$f.ply | grep -q 'check .*watertight' || exit 1; done"
 
+# --- frames in flight: the same meshes, lines and errors as one frame after the other ----------
+"$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'n_{:04}.ply' --raw --keep-going --in-flight 1 >n1.out 2>n1.err
+for n in 2 3 8; do
+    "$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o "i${n}_{:04}.ply" --raw --keep-going --in-flight $n >i$n.out 2>i$n.err
+    rc=$?
+    check "--in-flight $n: exit 1 as one at a time (got $rc)" test $rc -eq 1
+    check "--in-flight $n: the meshes of one at a time, byte for byte" bash -c \
+        "for f in 1 2 3 5 6; do cmp -s n_000\$f.ply i${n}_000\$f.ply || exit 1; done; [ ! -e i${n}_0004.ply ]"
+    check "--in-flight $n: the same lines, in the same order (times aside)" bash -c \
+        "diff <(sed -e 's/i${n}_/n_/' i$n.out | sed -E 's/[0-9]+\.[0-9]+ s\$//') <(sed -E 's/[0-9]+\.[0-9]+ s\$//' n1.out) && diff i$n.err n1.err"
+done
+out=$("$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'v_{:04}.ply' --raw --frames 1-3 -v)
+check "--in-flight: -v shows a frame's wait for the frames before it" grep -q "^    waiting " <<<"$out"
+expect_error "--in-flight 0 is refused" "--in-flight" \
+    "$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'x_{:04}.ply' --in-flight 0
+rm -f v_000*.ply
+
 # --- --skip-existing: finished frames untouched ------------------------------------------------
 before=$(stat -c '%Y.%N' k_000[12356].ply | md5sum)
 sleep 1.1
@@ -91,6 +108,20 @@ expect_error "--shard 3/2" "expected I/N with 1 <= I <= N" \
 expect_error "--shard on a single file" "needs a frame pattern" \
     "$BIN" reconstruct f_0002.bgeo -r 0.01 -o x.ply --shard 1/2
 check "--shard: nothing written by the refused runs" bash -c "! ls x_* x.ply 2>/dev/null | grep -q ."
+
+# --- Ctrl-C in the middle of a sequence with frames in flight: 130, nothing half-written -----
+for f in 1 2 3 4; do "$BIN" generate drop --count 400000 -r 0.01 --seed $f -o "big_000$f.xyz" >/dev/null; done
+"$BIN" reconstruct 'big_{:04}.xyz' -r 0.01 -o 'b_{:04}.ply' -q 2>b.err &
+pid=$!
+sleep 1.5
+kill -INT $pid
+wait $pid
+rc=$?
+check "sequence: Ctrl-C exits with 130 (got $rc)" test $rc -eq 130
+check "sequence: Ctrl-C says so in one line" bash -c "[ \$(wc -l <b.err) -eq 1 ] && grep -q interrupted b.err"
+check "sequence: Ctrl-C leaves no temporary file, and every mesh it left whole" bash -c \
+    "! ls | grep -q tmp && for m in \$(ls b_*.ply 2>/dev/null); do '$BIN' info \$m | grep -q 'check .*watertight' || exit 1; done"
+rm -f big_* b_*
 
 # --- convert: the same options (frames 1, 2, 3, 5, 6 now, frame 1 cut short) -------------------
 out=$("$BIN" convert 'f_{:04}.bgeo' 'c_{:04}.xyz' --keep-going 2>c.err)

@@ -73,6 +73,21 @@ struct AdaptiveBenchOptions
 
 int runAdaptiveBench(const AdaptiveBenchOptions& options);
 
+struct SequenceBenchOptions
+{
+    int frames = 20;
+    size_t count = 1000000; ///< particles per frame (about)
+    double radius = 0.01;   ///< r of the generated frames
+    std::string format = "xyz";
+    std::string inFlight = "1,2,3,4"; ///< the one-process ways: --in-flight values
+    std::string args;                 ///< more reconstruct options, e.g. "--device cuda"
+    std::string fluidsurf;            ///< the CLI; empty: the one beside fluidsurf_bench
+    int repeat = 3;
+    std::string dir = "/tmp"; ///< where the frames and meshes go (removed at the end)
+};
+
+int runSequenceBench(const SequenceBenchOptions& options);
+
 /// A benchmark scene: a real frame (with its file, for whole-process rows) or a generated one.
 struct Case
 {

@@ -6,6 +6,7 @@
 //   fluidsurf_bench post [--scenes ...]           decimation, smoothing, subdivision (Table 5.1)
 //   fluidsurf_bench adaptive [--scenes ...]       the 3-level grid vs uniform r, 2r
 //   (Tables 6.1-6.3)
+//   fluidsurf_bench sequence [--frames 20]        frames/s: a process per frame vs one for all
 #include "Bench.h"
 
 #include <CLI/CLI.hpp>
@@ -89,6 +90,30 @@ int main(int argc, char** argv)
         ->add_option("--level-tolerance", adaptive.levelTolerance,
                      "of the 'adaptive' rows, in voxels")
         ->capture_default_str();
+    fluidsurf::bench::SequenceBenchOptions sequence;
+    CLI::App* sequenceCmd = app.add_subcommand(
+        "sequence", "frames per second of a sequence: one process per frame against one process "
+                    "for all, with frames in flight");
+    sequenceCmd->add_option("--frames", sequence.frames, "frames in the sequence")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 9999));
+    sequenceCmd->add_option("--count", sequence.count, "particles per frame (about)")
+        ->capture_default_str();
+    sequenceCmd->add_option("-r,--radius", sequence.radius, "particle radius of the frames")
+        ->capture_default_str();
+    sequenceCmd->add_option("--format", sequence.format, "frame file format (extension)")
+        ->capture_default_str();
+    sequenceCmd
+        ->add_option("--in-flight", sequence.inFlight,
+                     "the one-process ways: --in-flight values (comma-separated)")
+        ->capture_default_str();
+    sequenceCmd->add_option("--args", sequence.args,
+                            "more reconstruct options for every way, e.g. \"--device cuda\"");
+    sequenceCmd->add_option("--fluidsurf", sequence.fluidsurf,
+                            "the fluidsurf program (default: the one beside this one)");
+    sequenceCmd->add_option("--repeat", sequence.repeat, "rounds (median)")->capture_default_str();
+    sequenceCmd->add_option("--dir", sequence.dir, "folder for the frames and meshes")
+        ->capture_default_str();
     bool coldAllocator = false;
     app.add_flag(
         "--cold-allocator", coldAllocator,
@@ -107,6 +132,7 @@ int main(int argc, char** argv)
         if (app.got_subcommand("mesh")) return fluidsurf::bench::runMeshBench(mesh);
         if (app.got_subcommand("post")) return fluidsurf::bench::runPostBench(post);
         if (app.got_subcommand("adaptive")) return fluidsurf::bench::runAdaptiveBench(adaptive);
+        if (app.got_subcommand("sequence")) return fluidsurf::bench::runSequenceBench(sequence);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "fluidsurf_bench: error: %s\n", e.what());
         return 1;

@@ -12,13 +12,17 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/Reconstruct.h>
+#include <fluidsurf/Sequence.h>
 #include <fluidsurf/TransferAttributes.h>
 #include <fluidsurf/io/AtomicFile.h>
 #include <fluidsurf/io/LevelSetIO.h>
 #include <fluidsurf/io/MeshIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <exception>
 #include <functional>
 #include <memory>
 
@@ -27,12 +31,19 @@ namespace cli {
 
 namespace {
 
+double secondsNow()
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
 struct MeshOptions
 {
     std::string input, output, frames, grid, vdb;
     PipelineOptions pipeline;
     SequenceOptions sequence;
     bool dropNonFinite = false;
+    size_t inFlight = 3; ///< reconstruct: frames read, made and written at once
 };
 
 void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o, Makes makes = Makes::MeshedLevelSet)
@@ -77,7 +88,7 @@ void writeAndReport(const MeshOptions& o, Context& ctx, const TriangleMesh& mesh
     if (!po.quiet && !bar)
         std::printf("%s -> %s: %zu vertices, %zu triangles, %.3f s\n", job.input.c_str(),
                     job.output.c_str(), mesh.points.size(), mesh.triangles.size(),
-                    ctx.timing().root().seconds);
+                    ctx.timing().root().seconds - ctx.timing().seconds("waiting"));
     if (po.check) {
         const auto more = meshCounts(check);
         counts.insert(counts.end(), more.begin(), more.end());
@@ -321,6 +332,12 @@ Runner addReconstructCommand(CLI::App& app)
         ->capture_default_str()
         ->check(CLI::Range(1e-6, 0.5));
     addPostOptions(cmd, o->pipeline);
+    cmd->add_option("--in-flight", o->inFlight,
+                    "frames of a sequence under way at once: 3 reads frame k+1 and writes frame "
+                    "k-1 while frame k is made; 4 to 8 also make frames at once (for many "
+                    "cores); 1 runs one frame after the other (least memory)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 8));
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
@@ -364,44 +381,105 @@ Runner addReconstructCommand(CLI::App& app)
         prepareDevice(ctx.device());
         const std::vector<size_t> picked = shardOf(jobs, o->sequence.shard);
         SequenceRun run(o->sequence, po.quiet);
+        std::vector<size_t> todo; // positions in jobs, skipped frames left out
+        for (size_t i : picked)
+            if (!run.skip(vdbJobs.empty()
+                              ? std::vector<std::string>{jobs[i].output}
+                              : std::vector<std::string>{jobs[i].output, vdbJobs[i].output}))
+                todo.push_back(i);
         Progress bar(picked.size(), "reconstruct", po.quiet);
         Report report(po);
+        // Frames in flight: each has its own context (a timing tree per frame) and carries its
+        // particles, params and result from read to write. A frame's error waits in its slot
+        // for write, which sees the frames in order: --keep-going and the lines stay as in a
+        // run of one frame after the other.
+        struct Slot
+        {
+            Context ctx;
+            size_t job = 0;
+            io::ReadInfo ri;
+            ParticleSet ps;
+            ReconstructParams params;
+            ReconstructResult res;
+            std::exception_ptr error;
+            double stageEnd = 0, waited = 0; ///< seconds: the frame's last stage ended, waits
+            void wait() { waited += secondsNow() - stageEnd; }
+        };
+        std::vector<Slot> slots(std::min(std::max<size_t>(todo.size(), 1), o->inFlight));
+        auto attempt = [](Slot& slot, const std::string& input, auto&& work) {
+            if (slot.error) return;
+            try {
+                forFile(input, work);
+            } catch (const Cancelled&) {
+                throw;
+            } catch (...) {
+                slot.error = std::current_exception();
+            }
+        };
         bool radiusChosen = false;
-        for (size_t k = 0; k < picked.size(); ++k) {
-            const size_t i = picked[k];
-            if (run.skip(vdbJobs.empty()
-                             ? std::vector<std::string>{jobs[i].output}
-                             : std::vector<std::string>{jobs[i].output, vdbJobs[i].output}))
-                continue;
+        FrameStages stages;
+        stages.read = [&](size_t k, size_t s) {
+            Slot& slot = slots[s];
+            po.configure(slot.ctx);
+            slot.job = todo[k];
+            slot.error = nullptr;
+            const size_t i = slot.job;
             if (!radiusChosen && i != 0) {
-                chooseSequenceRadiusFrom(po, ctx, jobs[0], ro, params);
+                chooseSequenceRadiusFrom(po, slot.ctx, jobs[0], ro, params);
                 radiusChosen = true;
             }
-            run.frame(jobs[i].input, [&] {
-                bar.update(k, jobs[i].input);
-                io::ReadInfo ri;
-                const ParticleSet ps =
-                    readFrame(po, ctx, jobs[i].input, ro, ri, !radiusChosen, params);
+            attempt(slot, jobs[i].input, [&] {
+                slot.ps =
+                    readFrame(po, slot.ctx, jobs[i].input, ro, slot.ri, !radiusChosen, params);
                 radiusChosen = true;
-                const ReconstructResult res = reconstruct(ps, params, ctx, jobs[i].input);
+            });
+            slot.params = params;
+            slot.waited = 0, slot.stageEnd = secondsNow();
+        };
+        stages.make = [&](size_t, size_t s) {
+            Slot& slot = slots[s];
+            const std::string& input = jobs[slot.job].input;
+            slot.wait();
+            attempt(slot, input, [&] {
+                slot.res = reconstruct(slot.ps, slot.params, slot.ctx, input);
+                // What write needs of the particles: the .vdb's attribute grids, the warning of
+                // a frame without surface. Otherwise they go now, not a frame later.
+                if (vdbJobs.empty() && slot.res.field.activeVoxels > 0 && !slot.res.mesh.empty())
+                    slot.ps = ParticleSet();
+            });
+            slot.stageEnd = secondsNow();
+        };
+        stages.write = [&](size_t k, size_t s) {
+            Slot& slot = slots[s];
+            const size_t i = slot.job;
+            Context& fctx = slot.ctx;
+            const ReconstructResult& res = slot.res;
+            slot.wait();
+            // Between its stages a frame waits for the frames before it: shown apart, so that
+            // the frame's line gives its own work.
+            if (slots.size() > 1) fctx.timing().add("waiting", slot.waited);
+            bar.update(k, jobs[i].input);
+            run.frame(jobs[i].input, [&] {
+                if (slot.error) std::rethrow_exception(slot.error);
                 // The frame's .vdb and mesh appear together, after both were written.
                 io::OutputGroup outputs;
                 if (!vdbJobs.empty()) {
                     openvdb::GridPtrVec grids = res.adaptiveGrid.empty()
                                                     ? openvdb::GridPtrVec{res.levelSet}
                                                     : res.adaptiveGrid.grids();
-                    const openvdb::GridPtrVec more =
-                        attributeGrids(ps, gridAttributes, *res.levelSet,
-                                       params.fieldParams(params.radius).influenceRadius, ctx);
+                    const openvdb::GridPtrVec more = attributeGrids(
+                        slot.ps, gridAttributes, *res.levelSet,
+                        slot.params.fieldParams(slot.params.radius).influenceRadius, fctx);
                     grids.insert(grids.end(), more.begin(), more.end());
-                    const auto t = ctx.scope("write vdb");
+                    const auto t = fctx.scope("write vdb");
                     io::writeLevelSet(grids, outputs.add(vdbJobs[i].output));
                 }
-                if (!po.quiet && !bar.enabled() && (res.field.isolated || ri.droppedNonFinite))
+                if (!po.quiet && !bar.enabled() && (res.field.isolated || slot.ri.droppedNonFinite))
                     std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",
                                 jobs[i].input.c_str(), res.field.isolated,
-                                isolatedFate(params, res).c_str(), ri.droppedNonFinite);
-                warnIfEmpty(jobs[i].input, ps, res.field, params.radius, res.mesh.empty());
+                                isolatedFate(slot.params, res).c_str(), slot.ri.droppedNonFinite);
+                warnIfEmpty(jobs[i].input, slot.ps, res.field, slot.params.radius,
+                            res.mesh.empty());
                 std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
                 if (res.adaptiveGrid.empty())
                     counts.push_back({"surface_cells", double(res.meshing.surfaceCells)});
@@ -409,11 +487,13 @@ Runner addReconstructCommand(CLI::App& app)
                     addAdaptiveCounts(res.adaptiveMesh, counts, false);
                 addPostCounts(res.post, counts);
                 counts.push_back({"isolated_spheres", double(res.isolatedSpheres)});
-                writeAndReport(*o, ctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
+                writeAndReport(*o, fctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
                                &res.field, res.vertexAttributes);
-                stopIfInterrupted(ctx);
+                stopIfInterrupted(fctx);
             });
-        }
+            slot.ps = ParticleSet(), slot.res = ReconstructResult();
+        };
+        runFrameStages(todo.size(), stages, slots.size());
         bar.finish();
         report.finish();
         return run.finish("reconstruct", picked.size());

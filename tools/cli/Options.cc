@@ -177,11 +177,16 @@ ReconstructParams PipelineOptions::resolved() const
     return p;
 }
 
-std::unique_ptr<tbb::global_control> PipelineOptions::setUp(Context& ctx) const
+void PipelineOptions::configure(Context& ctx) const
 {
     ctx.setDevice(deviceFromName(device));
     ctx.setThreads(threads);
     ctx.setProgress([](const ProgressEvent&) { return !interrupted(); });
+}
+
+std::unique_ptr<tbb::global_control> PipelineOptions::setUp(Context& ctx) const
+{
+    configure(ctx);
     if (threads <= 0) return nullptr;
     return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                  size_t(threads));

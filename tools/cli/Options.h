@@ -37,6 +37,8 @@ struct PipelineOptions
     /// A context for these options: device, threads, and Ctrl-C as a clean stop. The returned
     /// object holds -j for the whole process while it lives (file writing included).
     std::unique_ptr<tbb::global_control> setUp(Context& ctx) const;
+    /// setUp's device, threads and Ctrl-C for another context (a frame's, in a sequence).
+    void configure(Context& ctx) const;
 };
 
 void addFieldOptions(CLI::App* cmd, PipelineOptions& o);
