@@ -49,6 +49,11 @@ for n in 2 3 8; do
     check "--in-flight $n: the same lines, in the same order (times aside)" bash -c \
         "diff <(sed -e 's/i${n}_/n_/' i$n.out | sed -E 's/[0-9]+\.[0-9]+ s\$//') <(sed -E 's/[0-9]+\.[0-9]+ s\$//' n1.out) && diff i$n.err n1.err"
 done
+"$BIN" rasterize 'f_{:04}.bgeo' -r 0.01 -o 'rn_{:04}.vdb' --keep-going --in-flight 1 >rn.out 2>rn.err
+"$BIN" rasterize 'f_{:04}.bgeo' -r 0.01 -o 'ri_{:04}.vdb' --keep-going >ri.out 2>ri.err
+check "rasterize, 3 in flight: the level sets, lines and errors of one at a time" bash -c \
+    "for f in 1 2 3 5 6; do cmp -s rn_000\$f.vdb ri_000\$f.vdb || exit 1; done; [ ! -e ri_0004.vdb ] && diff <(sed -e 's/ri_/rn_/' ri.out | sed -E 's/[0-9]+\.[0-9]+ s\$//') <(sed -E 's/[0-9]+\.[0-9]+ s\$//' rn.out) && diff ri.err rn.err"
+rm -f rn_* ri_*
 out=$("$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'v_{:04}.ply' --raw --frames 1-3 -v)
 check "--in-flight: -v shows a frame's wait for the frames before it" grep -q "^    waiting " <<<"$out"
 expect_error "--in-flight 0 is refused" "--in-flight" \

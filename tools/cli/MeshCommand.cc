@@ -6,13 +6,13 @@
 #include "Frames.h"
 #include "Options.h"
 
+#include "ParticleFrames.h"
 #include "Progress.h"
 #include "Sequence.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/Reconstruct.h>
-#include <fluidsurf/Sequence.h>
 #include <fluidsurf/TransferAttributes.h>
 #include <fluidsurf/io/AtomicFile.h>
 #include <fluidsurf/io/LevelSetIO.h>
@@ -20,9 +20,7 @@
 #include <fluidsurf/io/ParticleIO.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
-#include <exception>
 #include <functional>
 #include <memory>
 
@@ -30,12 +28,6 @@ namespace fluidsurf {
 namespace cli {
 
 namespace {
-
-double secondsNow()
-{
-    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-}
 
 struct MeshOptions
 {
@@ -332,12 +324,7 @@ Runner addReconstructCommand(CLI::App& app)
         ->capture_default_str()
         ->check(CLI::Range(1e-6, 0.5));
     addPostOptions(cmd, o->pipeline);
-    cmd->add_option("--in-flight", o->inFlight,
-                    "frames of a sequence under way at once: 3 reads frame k+1 and writes frame "
-                    "k-1 while frame k is made; 4 to 8 also make frames at once (for many "
-                    "cores); 1 runs one frame after the other (least memory)")
-        ->capture_default_str()
-        ->check(CLI::Range(1, 8));
+    addInFlightOption(cmd, o->inFlight);
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
@@ -389,78 +376,21 @@ Runner addReconstructCommand(CLI::App& app)
                 todo.push_back(i);
         Progress bar(picked.size(), "reconstruct", po.quiet);
         Report report(po);
-        // Frames in flight: each has its own context (a timing tree per frame) and carries its
-        // particles, params and result from read to write. A frame's error waits in its slot
-        // for write, which sees the frames in order: --keep-going and the lines stay as in a
-        // run of one frame after the other.
-        struct Slot
-        {
-            Context ctx;
-            size_t job = 0;
-            io::ReadInfo ri;
-            ParticleSet ps;
-            ReconstructParams params;
-            ReconstructResult res;
-            std::exception_ptr error;
-            double stageEnd = 0, waited = 0; ///< seconds: the frame's last stage ended, waits
-            void wait() { waited += secondsNow() - stageEnd; }
-        };
-        std::vector<Slot> slots(std::min(std::max<size_t>(todo.size(), 1), o->inFlight));
-        auto attempt = [](Slot& slot, const std::string& input, auto&& work) {
-            if (slot.error) return;
-            try {
-                forFile(input, work);
-            } catch (const Cancelled&) {
-                throw;
-            } catch (...) {
-                slot.error = std::current_exception();
-            }
-        };
-        bool radiusChosen = false;
-        FrameStages stages;
-        stages.read = [&](size_t k, size_t s) {
-            Slot& slot = slots[s];
-            po.configure(slot.ctx);
-            slot.job = todo[k];
-            slot.error = nullptr;
-            const size_t i = slot.job;
-            if (!radiusChosen && i != 0) {
-                chooseSequenceRadiusFrom(po, slot.ctx, jobs[0], ro, params);
-                radiusChosen = true;
-            }
-            attempt(slot, jobs[i].input, [&] {
-                slot.ps =
-                    readFrame(po, slot.ctx, jobs[i].input, ro, slot.ri, !radiusChosen, params);
-                radiusChosen = true;
-            });
-            slot.params = params;
-            slot.waited = 0, slot.stageEnd = secondsNow();
-        };
-        stages.make = [&](size_t, size_t s) {
-            Slot& slot = slots[s];
-            const std::string& input = jobs[slot.job].input;
-            slot.wait();
-            attempt(slot, input, [&] {
-                slot.res = reconstruct(slot.ps, slot.params, slot.ctx, input);
+        ParticleRun pr{po, jobs, todo, ro, params, o->inFlight, run, bar};
+        using Frame = ParticleFrame<ReconstructResult>;
+        runParticleFrames<ReconstructResult>(
+            pr,
+            [&](Frame& f) {
+                const std::string& input = jobs[f.job].input;
+                f.result = reconstruct(f.particles, f.params, f.ctx, input);
                 // What write needs of the particles: the .vdb's attribute grids, the warning of
                 // a frame without surface. Otherwise they go now, not a frame later.
-                if (vdbJobs.empty() && slot.res.field.activeVoxels > 0 && !slot.res.mesh.empty())
-                    slot.ps = ParticleSet();
-            });
-            slot.stageEnd = secondsNow();
-        };
-        stages.write = [&](size_t k, size_t s) {
-            Slot& slot = slots[s];
-            const size_t i = slot.job;
-            Context& fctx = slot.ctx;
-            const ReconstructResult& res = slot.res;
-            slot.wait();
-            // Between its stages a frame waits for the frames before it: shown apart, so that
-            // the frame's line gives its own work.
-            if (slots.size() > 1) fctx.timing().add("waiting", slot.waited);
-            bar.update(k, jobs[i].input);
-            run.frame(jobs[i].input, [&] {
-                if (slot.error) std::rethrow_exception(slot.error);
+                if (vdbJobs.empty() && f.result.field.activeVoxels > 0 && !f.result.mesh.empty())
+                    f.particles = ParticleSet();
+            },
+            [&](Frame& f) {
+                const size_t i = f.job;
+                const ReconstructResult& res = f.result;
                 // The frame's .vdb and mesh appear together, after both were written.
                 io::OutputGroup outputs;
                 if (!vdbJobs.empty()) {
@@ -468,17 +398,18 @@ Runner addReconstructCommand(CLI::App& app)
                                                     ? openvdb::GridPtrVec{res.levelSet}
                                                     : res.adaptiveGrid.grids();
                     const openvdb::GridPtrVec more = attributeGrids(
-                        slot.ps, gridAttributes, *res.levelSet,
-                        slot.params.fieldParams(slot.params.radius).influenceRadius, fctx);
+                        f.particles, gridAttributes, *res.levelSet,
+                        f.params.fieldParams(f.params.radius).influenceRadius, f.ctx);
                     grids.insert(grids.end(), more.begin(), more.end());
-                    const auto t = fctx.scope("write vdb");
+                    const auto t = f.ctx.scope("write vdb");
                     io::writeLevelSet(grids, outputs.add(vdbJobs[i].output));
                 }
-                if (!po.quiet && !bar.enabled() && (res.field.isolated || slot.ri.droppedNonFinite))
+                if (!po.quiet && !bar.enabled() &&
+                    (res.field.isolated || f.readInfo.droppedNonFinite))
                     std::printf("%s: %zu isolated particles %s, %zu non-finite dropped\n",
                                 jobs[i].input.c_str(), res.field.isolated,
-                                isolatedFate(slot.params, res).c_str(), slot.ri.droppedNonFinite);
-                warnIfEmpty(jobs[i].input, slot.ps, res.field, slot.params.radius,
+                                isolatedFate(f.params, res).c_str(), f.readInfo.droppedNonFinite);
+                warnIfEmpty(jobs[i].input, f.particles, res.field, f.params.radius,
                             res.mesh.empty());
                 std::vector<std::pair<std::string, double>> counts = fieldCounts(res.field);
                 if (res.adaptiveGrid.empty())
@@ -487,13 +418,10 @@ Runner addReconstructCommand(CLI::App& app)
                     addAdaptiveCounts(res.adaptiveMesh, counts, false);
                 addPostCounts(res.post, counts);
                 counts.push_back({"isolated_spheres", double(res.isolatedSpheres)});
-                writeAndReport(*o, fctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
+                writeAndReport(*o, f.ctx, res.mesh, jobs[i], bar.enabled(), report, outputs, counts,
                                &res.field, res.vertexAttributes);
-                stopIfInterrupted(fctx);
+                stopIfInterrupted(f.ctx);
             });
-            slot.ps = ParticleSet(), slot.res = ReconstructResult();
-        };
-        runFrameStages(todo.size(), stages, slots.size());
         bar.finish();
         report.finish();
         return run.finish("reconstruct", picked.size());

@@ -3,6 +3,7 @@
 #include "Commands.h"
 #include "Frames.h"
 #include "Options.h"
+#include "ParticleFrames.h"
 #include "Progress.h"
 #include "Sequence.h"
 
@@ -24,6 +25,7 @@ struct RasterizeOptions
     PipelineOptions pipeline;
     SequenceOptions sequence;
     bool dropNonFinite = false;
+    size_t inFlight = 3; ///< frames read, made and written at once
 };
 } // namespace
 
@@ -42,6 +44,7 @@ Runner addRasterizeCommand(CLI::App& app)
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
                   "drop particles with NaN/Inf coordinates instead of failing");
     addSequenceOptions(cmd, o->sequence);
+    addInFlightOption(cmd, o->inFlight);
     cmd->footer(
         "Examples:\n"
         "  fluidsurf rasterize frame.bgeo -r 0.025 -o frame.vdb\n"
@@ -65,52 +68,57 @@ Runner addRasterizeCommand(CLI::App& app)
         prepareDevice(ctx.device());
         const std::vector<size_t> picked = shardOf(jobs, o->sequence.shard);
         SequenceRun run(o->sequence, po.quiet);
+        std::vector<size_t> todo; // positions in jobs, finished frames left out
+        for (size_t i : picked)
+            if (!run.skip({jobs[i].output})) todo.push_back(i);
         Progress bar(picked.size(), "rasterize", po.quiet);
         Report report(po);
-        bool radiusChosen = false;
-        for (size_t k = 0; k < picked.size(); ++k) {
-            const size_t i = picked[k];
-            if (run.skip({jobs[i].output})) continue;
-            if (!radiusChosen && i != 0) {
-                chooseSequenceRadiusFrom(po, ctx, jobs[0], ro, params);
-                radiusChosen = true;
-            }
-            run.frame(jobs[i].input, [&] {
-                bar.update(k, jobs[i].input);
-                io::ReadInfo ri;
-                const ParticleSet ps =
-                    readFrame(po, ctx, jobs[i].input, ro, ri, !radiusChosen, params);
-                radiusChosen = true;
-                checkAttributeNames(ps, params.attributes); // before the work
-                const RasterizeResult res =
-                    rasterizeParticles(ps, params.fieldParams(params.radius), ctx, jobs[i].input);
-                openvdb::GridPtrVec grids =
-                    res.adaptive.empty() ? openvdb::GridPtrVec{res.grid} : res.adaptive.grids();
-                const openvdb::GridPtrVec more =
-                    attributeGrids(ps, params.attributes, *res.grid,
-                                   params.fieldParams(params.radius).influenceRadius, ctx);
-                grids.insert(grids.end(), more.begin(), more.end());
+        struct Made
+        {
+            RasterizeResult field;
+            openvdb::GridPtrVec grids; ///< the level set(s) and the attribute grids
+        };
+        ParticleRun pr{po, jobs, todo, ro, params, o->inFlight, run, bar};
+        using Frame = ParticleFrame<Made>;
+        runParticleFrames<Made>(
+            pr,
+            [&](Frame& f) {
+                checkAttributeNames(f.particles, f.params.attributes); // before the work
+                const Params fp = f.params.fieldParams(f.params.radius);
+                Made& m = f.result;
+                m.field = rasterizeParticles(f.particles, fp, f.ctx, jobs[f.job].input);
+                m.grids = m.field.adaptive.empty() ? openvdb::GridPtrVec{m.field.grid}
+                                                   : m.field.adaptive.grids();
+                const openvdb::GridPtrVec more = attributeGrids(
+                    f.particles, f.params.attributes, *m.field.grid, fp.influenceRadius, f.ctx);
+                m.grids.insert(m.grids.end(), more.begin(), more.end());
+                // write needs them only for the warning of a frame without surface
+                if (m.field.stats.activeVoxels > 0) f.particles = ParticleSet();
+            },
+            [&](Frame& f) {
+                const FrameJob& job = jobs[f.job];
                 {
-                    const auto t = ctx.scope("write");
-                    io::writeLevelSet(grids, jobs[i].output);
+                    const auto t = f.ctx.scope("write");
+                    io::writeLevelSet(f.result.grids, job.output);
                 }
-                ctx.timing().finish();
-                const RasterizeStats& s = res.stats;
+                f.ctx.timing().finish();
+                const RasterizeStats& s = f.result.field.stats;
                 if (!po.quiet && !bar.enabled()) {
                     std::printf(
                         "%s -> %s: %zu particles (%zu surface, %zu splash, %zu isolated%s), "
                         "%zu active voxels, %.3f s\n",
-                        jobs[i].input.c_str(), jobs[i].output.c_str(), s.particles, s.surface,
-                        s.splash, s.isolated, params.field.keepIsolated ? " kept" : " left out",
-                        s.activeVoxels, ctx.timing().root().seconds);
-                    if (ri.droppedNonFinite)
-                        std::printf("  %zu non-finite particles dropped\n", ri.droppedNonFinite);
+                        job.input.c_str(), job.output.c_str(), s.particles, s.surface, s.splash,
+                        s.isolated, f.params.field.keepIsolated ? " kept" : " left out",
+                        s.activeVoxels,
+                        f.ctx.timing().root().seconds - f.ctx.timing().seconds("waiting"));
+                    if (f.readInfo.droppedNonFinite)
+                        std::printf("  %zu non-finite particles dropped\n",
+                                    f.readInfo.droppedNonFinite);
                 }
-                warnIfEmpty(jobs[i].input, ps, s, params.radius, false);
-                report.frame(jobs[i].input, ctx, fieldCounts(s), &s);
-                stopIfInterrupted(ctx); // Ctrl-C during the write: that frame is complete
+                warnIfEmpty(job.input, f.particles, s, f.params.radius, false);
+                report.frame(job.input, f.ctx, fieldCounts(s), &s);
+                stopIfInterrupted(f.ctx); // Ctrl-C during the write: that frame is complete
             });
-        }
         bar.finish();
         report.finish();
         return run.finish("rasterize", picked.size());

@@ -1,9 +1,12 @@
 // Sequence.cc
 #include "Sequence.h"
+#include "ParticleFrames.h"
 
 #include <fluidsurf/Error.h>
 
 #include <sys/stat.h>
+
+#include <chrono>
 
 #include <cstdio>
 #include <cstdlib>
@@ -100,6 +103,23 @@ void chooseSequenceRadiusFrom(const PipelineOptions& po, Context& ctx, const Fra
         throw ValueError("r is chosen from the sequence's first frame, which cannot be read (" +
                          firstLine(e.what()) + "); pass -r");
     }
+}
+
+double secondsNow()
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
+
+void addInFlightOption(CLI::App* cmd, size_t& inFlight)
+{
+    cmd->add_option("--in-flight", inFlight,
+                    "frames of a sequence under way at once: 3 reads frame k+1 and writes frame "
+                    "k-1 while frame k is made; 4 to 8 also make frames at once (for many "
+                    "cores; each frame in flight holds its particles and results); 1 runs one "
+                    "frame after the other (least memory)")
+        ->capture_default_str()
+        ->check(CLI::Range(1, 8));
 }
 
 SequenceRun::SequenceRun(const SequenceOptions& o, bool quiet)
