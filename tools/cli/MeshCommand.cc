@@ -35,7 +35,7 @@ struct MeshOptions
     PipelineOptions pipeline;
     SequenceOptions sequence;
     bool dropNonFinite = false;
-    size_t inFlight = 3; ///< reconstruct: frames read, made and written at once
+    size_t inFlight = 0; ///< reconstruct --in-flight (0: by the threads)
 };
 
 void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o, Makes makes = Makes::MeshedLevelSet)

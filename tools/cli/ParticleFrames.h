@@ -24,8 +24,11 @@ namespace cli {
 
 double secondsNow();
 
-/// --in-flight N: frames of a sequence under way at once.
+/// --in-flight N: frames of a sequence under way at once (0: framesInFlight chooses).
 void addInFlightOption(CLI::App* cmd, size_t& inFlight);
+/// The option's value, or without one: 4 (two frames made at once) where the run has 8 or more
+/// threads (-j, else the cores it may use), else 3.
+size_t framesInFlight(size_t option, int threads);
 
 template <typename Result> struct ParticleFrame
 {
@@ -47,7 +50,7 @@ struct ParticleRun
     std::vector<size_t> todo; ///< positions in jobs to run, in order
     io::ReadOptions read;
     ReconstructParams& params; ///< params.radius is set from the first frame read without -r
-    size_t inFlight;
+    size_t inFlight;           ///< --in-flight (0: framesInFlight chooses)
     SequenceRun& run;
     Progress& bar;
 };
@@ -60,7 +63,8 @@ void runParticleFrames(ParticleRun& r, const std::function<void(ParticleFrame<Re
                        const std::function<void(ParticleFrame<Result>&)>& write)
 {
     using Frame = ParticleFrame<Result>;
-    std::vector<Frame> slots(std::min(std::max<size_t>(r.todo.size(), 1), r.inFlight));
+    std::vector<Frame> slots(std::min(std::max<size_t>(r.todo.size(), 1),
+                                      framesInFlight(r.inFlight, r.options.threads)));
     auto attempt = [&](Frame& f, auto&& work) {
         if (f.error) return;
         try {

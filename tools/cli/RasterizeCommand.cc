@@ -25,7 +25,7 @@ struct RasterizeOptions
     PipelineOptions pipeline;
     SequenceOptions sequence;
     bool dropNonFinite = false;
-    size_t inFlight = 3; ///< frames read, made and written at once
+    size_t inFlight = 0; ///< --in-flight (0: by the threads)
 };
 } // namespace
 

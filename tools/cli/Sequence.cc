@@ -5,7 +5,9 @@
 #include <fluidsurf/Error.h>
 
 #include <sys/stat.h>
+#include <tbb/info.h>
 
+#include <algorithm>
 #include <chrono>
 
 #include <cstdio>
@@ -115,11 +117,19 @@ void addInFlightOption(CLI::App* cmd, size_t& inFlight)
 {
     cmd->add_option("--in-flight", inFlight,
                     "frames of a sequence under way at once: 3 reads frame k+1 and writes frame "
-                    "k-1 while frame k is made; 4 to 8 also make frames at once (for many "
-                    "cores; each frame in flight holds its particles and results); 1 runs one "
-                    "frame after the other (least memory)")
-        ->capture_default_str()
+                    "k-1 while frame k is made; 4 to 8 also make frames at once (each frame in "
+                    "flight holds its particles and results); 1 runs one frame after the other "
+                    "(least memory). Default: 4 with 8 or more threads (-j), else 3")
         ->check(CLI::Range(1, 8));
+}
+
+size_t framesInFlight(size_t option, int threads)
+{
+    // One frame leaves many cores partly idle (its serial steps, its smaller passes): on 16
+    // cores two frames made at once run 1.7x the frames per second of one (BENCHMARKS.md).
+    if (option > 0) return option;
+    const int cores = tbb::info::default_concurrency(); // the cores this process may use
+    return (threads > 0 ? std::min(threads, cores) : cores) >= 8 ? 4 : 3;
 }
 
 SequenceRun::SequenceRun(const SequenceOptions& o, bool quiet)
