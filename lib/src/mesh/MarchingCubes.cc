@@ -24,9 +24,34 @@ namespace {
 using openvdb::Coord;
 using FloatTree = openvdb::FloatTree;
 using FloatLeaf = FloatTree::LeafNodeType;
-/// Per active voxel: (number of the first vertex on its +x/+y/+z edges) << 3 | crossing-axis bits.
-using IndexTree = openvdb::UInt32Tree; // (first vertex << 3) | edge bits: 4 bytes a voxel
-using IndexLeaf = IndexTree::LeafNodeType;
+using Leaves = openvdb::tree::LeafManager<const FloatTree>;
+using LeafRange = Leaves::LeafRange;
+
+/// A leaf's crossing edges: per axis, the voxels whose edge to +axis (to an active neighbour)
+/// changes sign, as 8 words of 64 bits (LeafBits' order); and per word, the edges in the words
+/// before it. The vertices are numbered leaf by leaf, voxel by voxel in offset order, and +x,
+/// +y, +z within a voxel, so a vertex's number is a prefix count of these bits: 224 bytes a
+/// leaf instead of a 4-byte number per band voxel (an index tree: 128 MB on a 1.7M-particle
+/// frame).
+struct EdgeWords
+{
+    uint64_t axis[3][8] = {};
+    uint32_t before[8] = {};
+
+    /// The number, from the leaf's first vertex, of the vertex on the edge from local offset i
+    /// to +axis (which must cross).
+    uint32_t vertex(unsigned i, int axis) const
+    {
+        const unsigned w = i >> 6;
+        const uint64_t below = (uint64_t(1) << (i & 63)) - 1;
+        uint32_t n = before[w] + uint32_t(__builtin_popcountll(this->axis[0][w] & below) +
+                                          __builtin_popcountll(this->axis[1][w] & below) +
+                                          __builtin_popcountll(this->axis[2][w] & below));
+        for (int a = 0; a < axis; ++a)
+            n += uint32_t(this->axis[a][w] >> (i & 63) & 1);
+        return n;
+    }
+};
 
 /// Value and active state of the voxel at local offset (x, y, z) + d of leaf, through the leaf
 /// when it is inside and through the accessor otherwise.
@@ -45,7 +70,6 @@ inline bool probe(const FloatLeaf& leaf, FloatAccessor& acc, int x, int y, int z
 /// One leaf's triangles, and the centre vertices it added (numbered kLocalVertex | i until the
 /// leaves are joined).
 constexpr uint32_t kLocalVertex = 0x80000000u;
-constexpr uint8_t kBitCount[8] = {0, 1, 1, 2, 1, 2, 2, 3};
 
 /// (OpenVDB maps multiply row vectors, p * M; below as M^T * p.)
 struct Affine
@@ -71,33 +95,35 @@ struct Passes
 {
     const FloatTree& tree;
     Affine affine;
-    IndexTree& index;
-    openvdb::tree::LeafManager<IndexTree>& leaves;
+    Leaves& leaves;
     Context& ctx;
     std::vector<uint64_t> first; // per leaf: number of its first vertex (after pass 1)
 
-    std::vector<LeafBits> bits; // per leaf (pass 0)
-    std::unordered_map<const IndexLeaf*, size_t> position;
+    std::vector<LeafBits> bits;   // per leaf (pass 0)
+    std::vector<EdgeWords> edges; // per leaf (pass 1)
+    std::unordered_map<const FloatLeaf*, size_t> position;
     const LeafBits none{};
 
-    const FloatLeaf& valueLeaf(const IndexLeaf& leaf) const
+    /// The position of the leaf at origin o, or -1 where there is none.
+    long leafAt(const Coord& o) const
     {
-        return *tree.probeConstLeaf(leaf.origin());
+        const FloatLeaf* n = tree.probeConstLeaf(o);
+        return n ? long(position.at(n)) : -1;
     }
 
     /// The bits of the leaf one leaf away along +axis (or -axis: step -1); nothing active where
     /// there is no leaf.
-    const LeafBits& next(const IndexLeaf& leaf, int axis, int step = 1) const
+    const LeafBits& next(const FloatLeaf& leaf, int axis, int step = 1) const
     {
         Coord o = leaf.origin();
-        o[axis] += step * int(IndexLeaf::DIM);
-        const IndexLeaf* n = index.probeConstLeaf(o);
-        return n ? bits[position.at(n)] : none;
+        o[axis] += step * int(FloatLeaf::DIM);
+        const long n = leafAt(o);
+        return n >= 0 ? bits[size_t(n)] : none;
     }
-    LeafStar star(const IndexLeaf& leaf) const
+    LeafStar star(const FloatLeaf& leaf) const
     {
         LeafStar s;
-        s.values[0] = valueLeaf(leaf).buffer().data(), s.bits[0] = &bits[position.at(&leaf)];
+        s.values[0] = leaf.buffer().data(), s.bits[0] = &bits[position.at(&leaf)];
         for (int a = 0; a < 3; ++a)
             for (int d = 0; d < 2; ++d) {
                 Coord o = leaf.origin();
@@ -108,10 +134,10 @@ struct Passes
             }
         return s;
     }
-    const FloatLeaf* nextValues(const IndexLeaf& leaf, int axis) const
+    const FloatLeaf* nextValues(const FloatLeaf& leaf, int axis) const
     {
         Coord o = leaf.origin();
-        o[axis] += int(IndexLeaf::DIM);
+        o[axis] += int(FloatLeaf::DIM);
         return tree.probeConstLeaf(o);
     }
 
@@ -121,107 +147,99 @@ struct Passes
         bits.resize(leaves.leafCount());
         for (size_t i = 0; i < leaves.leafCount(); ++i)
             position[&leaves.leaf(i)] = i;
-        tbb::parallel_for(leaves.leafRange(),
-                          [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
-                              ctx.checkpoint();
-                              for (auto leaf = range.begin(); leaf; ++leaf)
-                                  bits[leaf.pos()] = LeafBits(valueLeaf(*leaf));
-                          });
+        tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
+            ctx.checkpoint();
+            for (auto leaf = range.begin(); leaf; ++leaf)
+                bits[leaf.pos()] = LeafBits(*leaf);
+        });
     }
 
-    // Pass 1: crossing bits per active voxel, count per leaf.
+    // Pass 1: crossing edges per leaf, counted.
     void markEdges()
     {
         std::vector<uint64_t> counts(leaves.leafCount(), 0);
-        tbb::parallel_for(
-            leaves.leafRange(), [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
-                ctx.checkpoint();
-                for (auto leaf = range.begin(); leaf; ++leaf) {
-                    const LeafBits &here = bits[leaf.pos()], &nx = next(*leaf, 0),
-                                   &ny = next(*leaf, 1), &nz = next(*leaf, 2);
-                    uint64_t n = 0;
-                    for (int x = 0; x < 8; ++x) {
-                        const uint64_t act = here.active[x], in = here.in[x];
-                        // Edges to +z, +y and +x with a sign change between active ends; at the
-                        // leaf's far faces the other end is in the neighbouring leaf.
-                        const uint64_t ez = ((in ^ in >> 1) & act & act >> 1 & ~kZ7) |
-                                            ((in ^ nz.in[x] << 7) & act & nz.active[x] << 7 & kZ7);
-                        const uint64_t ey =
-                            ((in ^ in >> 8) & act & act >> 8 & kYBelow7) |
-                            ((in ^ ny.in[x] << 56) & act & ny.active[x] << 56 & kY7);
-                        const uint64_t ex = x < 7 ? (in ^ here.in[x + 1]) & act & here.active[x + 1]
-                                                  : (in ^ nx.in[0]) & act & nx.active[0];
-                        for (uint64_t todo = act; todo; todo &= todo - 1) {
-                            const int b = __builtin_ctzll(todo);
-                            const uint32_t edges = uint32_t(ex >> b & 1) |
-                                                   uint32_t(ey >> b & 1) << 1 |
-                                                   uint32_t(ez >> b & 1) << 2;
-                            leaf->setValueOnly(openvdb::Index(x << 6 | b), edges);
-                            n += kBitCount[edges];
-                        }
-                    }
-                    counts[leaf.pos()] = n;
+        edges.assign(leaves.leafCount(), EdgeWords());
+        tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
+            ctx.checkpoint();
+            for (auto leaf = range.begin(); leaf; ++leaf) {
+                const LeafBits &here = bits[leaf.pos()], &nx = next(*leaf, 0), &ny = next(*leaf, 1),
+                               &nz = next(*leaf, 2);
+                EdgeWords& e = edges[leaf.pos()];
+                uint32_t n = 0;
+                for (int x = 0; x < 8; ++x) {
+                    const uint64_t act = here.active[x], in = here.in[x];
+                    // Edges to +z, +y and +x with a sign change between active ends; at the
+                    // leaf's far faces the other end is in the neighbouring leaf.
+                    const uint64_t ez = ((in ^ in >> 1) & act & act >> 1 & ~kZ7) |
+                                        ((in ^ nz.in[x] << 7) & act & nz.active[x] << 7 & kZ7);
+                    const uint64_t ey = ((in ^ in >> 8) & act & act >> 8 & kYBelow7) |
+                                        ((in ^ ny.in[x] << 56) & act & ny.active[x] << 56 & kY7);
+                    const uint64_t ex = x < 7 ? (in ^ here.in[x + 1]) & act & here.active[x + 1]
+                                              : (in ^ nx.in[0]) & act & nx.active[0];
+                    e.axis[0][x] = ex, e.axis[1][x] = ey, e.axis[2][x] = ez;
+                    e.before[x] = n;
+                    n += uint32_t(__builtin_popcountll(ex) + __builtin_popcountll(ey) +
+                                  __builtin_popcountll(ez));
                 }
-            });
+                counts[leaf.pos()] = n;
+            }
+        });
         first.assign(counts.size() + 1, 0);
         std::partial_sum(counts.begin(), counts.end(), first.begin() + 1);
     }
 
-    // Pass 2: vertex numbers into the index tree, positions and normals into the mesh.
+    // Pass 2: positions and normals of the vertices, in their numbers' order.
     void placeVertices(TriangleMesh& mesh)
     {
         mesh.points.resize(first.back());
         mesh.normals.resize(first.back());
-        tbb::parallel_for(
-            leaves.leafRange(), [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
-                ctx.checkpoint();
-                FloatAccessor acc(tree);
-                for (auto leaf = range.begin(); leaf; ++leaf) {
-                    const FloatLeaf& values = valueLeaf(*leaf);
-                    const LeafStar star = this->star(*leaf);
-                    const LeafBits& here = bits[leaf.pos()];
-                    uint32_t* packed = leaf->buffer().data();
-                    const float* buffer = values.buffer().data();
-                    uint64_t next = first[leaf.pos()];
-                    for (int x = 0; x < 8; ++x)
-                        for (uint64_t todo = here.active[x]; todo; todo &= todo - 1) {
-                            const int offset = x << 6 | __builtin_ctzll(todo);
-                            const uint32_t edges = packed[offset];
-                            if (!edges)
-                                continue; // only voxels with crossing edges are ever looked up
-                            packed[offset] = uint32_t(next) << 3 | edges;
-                            const Coord l = FloatLeaf::offsetToLocalCoord(openvdb::Index(offset)),
-                                        a = values.origin() + l;
-                            const openvdb::Vec3d ga = star.gradient(l);
-                            const float va = buffer[offset];
-                            for (int axis = 0; axis < 3; ++axis) {
-                                if (!(edges >> axis & 1)) continue;
-                                Coord lb = l, b = a;
-                                lb[axis] += 1, b[axis] += 1;
-                                float vb = 0;
-                                star.read(lb, axis, vb);
-                                const double t = crossing(va, vb);
-                                openvdb::Vec3d p = a.asVec3d();
-                                p[axis] += t;
-                                const openvdb::Vec3d w =
-                                    affine.linear.transpose() * p + affine.translation;
-                                const openvdb::Vec3d gb = lb[axis] < int(FloatLeaf::DIM)
-                                                              ? star.gradient(lb)
-                                                              : indexGradient(acc, b);
-                                openvdb::Vec3d g = ga * (1 - t) + gb * t;
-                                // Where the gradient vanishes: the edge direction, from inside to
-                                // outside.
-                                if (!(g.lengthSqr() > 0)) g[axis] = va < 0 ? 1.0 : -1.0;
-                                g = affine.jacobianInverse.transpose() * g;
-                                g.normalize();
-                                mesh.points[next] = Vec3f(float(w.x()), float(w.y()), float(w.z()));
-                                mesh.normals[next] =
-                                    Vec3f(float(g.x()), float(g.y()), float(g.z()));
-                                ++next;
-                            }
+        tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
+            ctx.checkpoint();
+            FloatAccessor acc(tree);
+            for (auto leaf = range.begin(); leaf; ++leaf) {
+                const FloatLeaf& values = *leaf;
+                const LeafStar star = this->star(*leaf);
+                const EdgeWords& e = this->edges[leaf.pos()];
+                const float* buffer = values.buffer().data();
+                uint64_t next = first[leaf.pos()];
+                for (int x = 0; x < 8; ++x)
+                    for (uint64_t todo = e.axis[0][x] | e.axis[1][x] | e.axis[2][x]; todo;
+                         todo &= todo - 1) {
+                        const int b = __builtin_ctzll(todo), offset = x << 6 | b;
+                        const uint32_t edges = uint32_t(e.axis[0][x] >> b & 1) |
+                                               uint32_t(e.axis[1][x] >> b & 1) << 1 |
+                                               uint32_t(e.axis[2][x] >> b & 1) << 2;
+                        const Coord l = FloatLeaf::offsetToLocalCoord(openvdb::Index(offset)),
+                                    a = values.origin() + l;
+                        const openvdb::Vec3d ga = star.gradient(l);
+                        const float va = buffer[offset];
+                        for (int axis = 0; axis < 3; ++axis) {
+                            if (!(edges >> axis & 1)) continue;
+                            Coord lb = l, b = a;
+                            lb[axis] += 1, b[axis] += 1;
+                            float vb = 0;
+                            star.read(lb, axis, vb);
+                            const double t = crossing(va, vb);
+                            openvdb::Vec3d p = a.asVec3d();
+                            p[axis] += t;
+                            const openvdb::Vec3d w =
+                                affine.linear.transpose() * p + affine.translation;
+                            const openvdb::Vec3d gb = lb[axis] < int(FloatLeaf::DIM)
+                                                          ? star.gradient(lb)
+                                                          : indexGradient(acc, b);
+                            openvdb::Vec3d g = ga * (1 - t) + gb * t;
+                            // Where the gradient vanishes: the edge direction, from inside to
+                            // outside.
+                            if (!(g.lengthSqr() > 0)) g[axis] = va < 0 ? 1.0 : -1.0;
+                            g = affine.jacobianInverse.transpose() * g;
+                            g.normalize();
+                            mesh.points[next] = Vec3f(float(w.x()), float(w.y()), float(w.z()));
+                            mesh.normals[next] = Vec3f(float(g.x()), float(g.y()), float(g.z()));
+                            ++next;
                         }
-                }
-            });
+                    }
+            }
+        });
     }
 
     // Pass 3: triangles of every complete cell with a sign change, per leaf.
@@ -229,92 +247,118 @@ struct Passes
     {
         perLeaf.assign(leaves.leafCount(), {});
         std::atomic<size_t> surfaceCells{0};
-        tbb::parallel_for(
-            leaves.leafRange(), [&](const openvdb::tree::LeafManager<IndexTree>::LeafRange& range) {
-                ctx.checkpoint();
-                FloatAccessor acc(tree);
-                openvdb::tree::ValueAccessor<const IndexTree> idx(index);
-                size_t cells = 0;
-                for (auto leaf = range.begin(); leaf; ++leaf) {
-                    const FloatLeaf& values = valueLeaf(*leaf);
-                    auto& out = perLeaf[leaf.pos()];
-                    const LeafBits &here = bits[leaf.pos()], &nx = next(*leaf, 0),
-                                   &ny = next(*leaf, 1), &nz = next(*leaf, 2);
-                    const float* buffer = values.buffer().data();
-                    const float* plus[3] = {nullptr, nullptr,
-                                            nullptr}; // neighbour buffers, read only when active
-                    for (int a = 0; a < 3; ++a)
-                        if (const FloatLeaf* l = nextValues(*leaf, a)) plus[a] = l->buffer().data();
-                    float c[8];
-                    // Value at local (x, y, z) with at most one coordinate equal to 8.
-                    auto value = [&](int x, int y, int z) {
-                        if (x == 8) return plus[0][y << 3 | z];
-                        if (y == 8) return plus[1][x << 6 | z];
-                        if (z == 8) return plus[2][x << 6 | y << 3];
-                        return buffer[x << 6 | y << 3 | z];
-                    };
-                    // Cells that are complete and have a sign change, 64 candidates at a time, from
-                    // the two x-planes of their corners (a, b: active; p, q: inside).
-                    auto emit = [&](int x, uint64_t a0, uint64_t a1, uint64_t p0, uint64_t p1,
-                                    uint64_t valid, int dy, int dz) {
-                        const uint64_t complete = squareAll(a0) & squareAll(a1) & valid;
-                        const uint64_t mixed =
-                            (squareAny(p0) | squareAny(p1)) & ~(squareAll(p0) & squareAll(p1));
-                        for (uint64_t todo = complete & mixed; todo; todo &= todo - 1) {
-                            const int b = __builtin_ctzll(todo), y = (b >> 3) + dy,
-                                      z = (b & 7) + dz;
-                            for (int n = 0; n < 8; ++n)
-                                c[n] =
-                                    value(x + kCorner[n][0], y + kCorner[n][1], z + kCorner[n][2]);
-                            ++cells;
-                            cell(values.origin().offsetBy(x, y, z), c, *leaf, idx, mesh, out);
-                        }
-                    };
-                    for (int x = 0; x < 7; ++x) {
-                        emit(x, here.active[x], here.active[x + 1], here.in[x], here.in[x + 1],
-                             ~kZ7 & kYBelow7, 0, 0);
-                        // y = 7 (z < 7) and z = 7 (y < 7): one row / column of candidates each.
-                        emit(x, acrossY(here.active[x], ny.active[x]),
-                             acrossY(here.active[x + 1], ny.active[x + 1]),
-                             acrossY(here.in[x], ny.in[x]), acrossY(here.in[x + 1], ny.in[x + 1]),
-                             0x7F, 7, 0);
-                        emit(x, acrossZ(here.active[x], nz.active[x]),
-                             acrossZ(here.active[x + 1], nz.active[x + 1]),
-                             acrossZ(here.in[x], nz.in[x]), acrossZ(here.in[x + 1], nz.in[x + 1]),
-                             kZ0 & kYBelow7, 0, 7);
-                    }
-                    emit(7, here.active[7], nx.active[0], here.in[7], nx.in[0], ~kZ7 & kYBelow7, 0,
-                         0); // x = 7
-                    // Cells with two or three coordinates 7 (22 per leaf): through the accessor.
-                    for (int k = 0; k < 22; ++k) {
-                        const Coord l = k < 8    ? Coord(7, 7, k)
-                                        : k < 15 ? Coord(7, k - 8, 7)
-                                                 : Coord(k - 15, 7, 7);
-                        const openvdb::Index offset = FloatLeaf::coordToOffset(l);
-                        if (!values.isValueOn(offset)) continue;
-                        c[0] = buffer[offset];
-                        bool complete = true;
-                        for (int n = 1; n < 8 && complete; ++n)
-                            complete = probe(values, acc, l.x(), l.y(), l.z(), kCorner[n][0],
-                                             kCorner[n][1], kCorner[n][2], c[n]);
-                        if (!complete) continue;
-                        int config = 0;
+        tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
+            ctx.checkpoint();
+            FloatAccessor acc(tree);
+            size_t cells = 0;
+            for (auto leaf = range.begin(); leaf; ++leaf) {
+                const FloatLeaf& values = *leaf;
+                const VertexStar idx = vertexStar(*leaf);
+                auto& out = perLeaf[leaf.pos()];
+                const LeafBits &here = bits[leaf.pos()], &nx = next(*leaf, 0), &ny = next(*leaf, 1),
+                               &nz = next(*leaf, 2);
+                const float* buffer = values.buffer().data();
+                const float* plus[3] = {nullptr, nullptr,
+                                        nullptr}; // neighbour buffers, read only when active
+                for (int a = 0; a < 3; ++a)
+                    if (const FloatLeaf* l = nextValues(*leaf, a)) plus[a] = l->buffer().data();
+                float c[8];
+                // Value at local (x, y, z) with at most one coordinate equal to 8.
+                auto value = [&](int x, int y, int z) {
+                    if (x == 8) return plus[0][y << 3 | z];
+                    if (y == 8) return plus[1][x << 6 | z];
+                    if (z == 8) return plus[2][x << 6 | y << 3];
+                    return buffer[x << 6 | y << 3 | z];
+                };
+                // Cells that are complete and have a sign change, 64 candidates at a time, from
+                // the two x-planes of their corners (a, b: active; p, q: inside).
+                auto emit = [&](int x, uint64_t a0, uint64_t a1, uint64_t p0, uint64_t p1,
+                                uint64_t valid, int dy, int dz) {
+                    const uint64_t complete = squareAll(a0) & squareAll(a1) & valid;
+                    const uint64_t mixed =
+                        (squareAny(p0) | squareAny(p1)) & ~(squareAll(p0) & squareAll(p1));
+                    for (uint64_t todo = complete & mixed; todo; todo &= todo - 1) {
+                        const int b = __builtin_ctzll(todo), y = (b >> 3) + dy, z = (b & 7) + dz;
                         for (int n = 0; n < 8; ++n)
-                            config |= int(inside(c[n])) << n;
-                        if (config == 0 || config == 255) continue;
+                            c[n] = value(x + kCorner[n][0], y + kCorner[n][1], z + kCorner[n][2]);
                         ++cells;
-                        cell(values.origin() + l, c, *leaf, idx, mesh, out);
+                        cell(values.origin().offsetBy(x, y, z), c, idx, mesh, out);
                     }
+                };
+                for (int x = 0; x < 7; ++x) {
+                    emit(x, here.active[x], here.active[x + 1], here.in[x], here.in[x + 1],
+                         ~kZ7 & kYBelow7, 0, 0);
+                    // y = 7 (z < 7) and z = 7 (y < 7): one row / column of candidates each.
+                    emit(x, acrossY(here.active[x], ny.active[x]),
+                         acrossY(here.active[x + 1], ny.active[x + 1]),
+                         acrossY(here.in[x], ny.in[x]), acrossY(here.in[x + 1], ny.in[x + 1]), 0x7F,
+                         7, 0);
+                    emit(x, acrossZ(here.active[x], nz.active[x]),
+                         acrossZ(here.active[x + 1], nz.active[x + 1]),
+                         acrossZ(here.in[x], nz.in[x]), acrossZ(here.in[x + 1], nz.in[x + 1]),
+                         kZ0 & kYBelow7, 0, 7);
                 }
-                surfaceCells += cells;
-            });
+                emit(7, here.active[7], nx.active[0], here.in[7], nx.in[0], ~kZ7 & kYBelow7, 0,
+                     0); // x = 7
+                // Cells with two or three coordinates 7 (22 per leaf): through the accessor.
+                for (int k = 0; k < 22; ++k) {
+                    const Coord l = k < 8    ? Coord(7, 7, k)
+                                    : k < 15 ? Coord(7, k - 8, 7)
+                                             : Coord(k - 15, 7, 7);
+                    const openvdb::Index offset = FloatLeaf::coordToOffset(l);
+                    if (!values.isValueOn(offset)) continue;
+                    c[0] = buffer[offset];
+                    bool complete = true;
+                    for (int n = 1; n < 8 && complete; ++n)
+                        complete = probe(values, acc, l.x(), l.y(), l.z(), kCorner[n][0],
+                                         kCorner[n][1], kCorner[n][2], c[n]);
+                    if (!complete) continue;
+                    int config = 0;
+                    for (int n = 0; n < 8; ++n)
+                        config |= int(inside(c[n])) << n;
+                    if (config == 0 || config == 255) continue;
+                    ++cells;
+                    cell(values.origin() + l, c, idx, mesh, out);
+                }
+            }
+            surfaceCells += cells;
+        });
         return surfaceCells;
     }
 
+    /// A leaf and the 7 leaves beyond its +x, +y, +z faces, edges and corner: where a cell's
+    /// edges may start. Indexed by (x >= 8) | (y >= 8) << 1 | (z >= 8) << 2 of a local coord.
+    struct VertexStar
+    {
+        Coord origin;
+        const EdgeWords* edges[8] = {};
+        uint64_t first[8] = {};
+
+        uint32_t vertex(Coord l, int axis) const
+        {
+            const int k = (l.x() >> 3) | (l.y() >> 3) << 1 | (l.z() >> 3) << 2;
+            return uint32_t(first[k]) +
+                   edges[k]->vertex(unsigned((l.x() & 7) << 6 | (l.y() & 7) << 3 | (l.z() & 7)),
+                                    axis);
+        }
+    };
+    VertexStar vertexStar(const FloatLeaf& leaf) const
+    {
+        VertexStar s;
+        s.origin = leaf.origin();
+        for (int k = 0; k < 8; ++k) {
+            const long n =
+                k ? leafAt(s.origin.offsetBy((k & 1) * 8, (k >> 1 & 1) * 8, (k >> 2 & 1) * 8))
+                  : long(position.at(&leaf));
+            if (n >= 0) s.edges[k] = &edges[size_t(n)], s.first[k] = first[size_t(n)];
+        }
+        return s;
+    }
+
     // The polygons of one cell (CellPolygons.h). A polygon is fanned from its first vertex,
-    // except in a cell with an ambiguous face, where it gets a centre vertex instead.
-    template <typename IndexAccessor>
-    void cell(const Coord& origin, const float c[8], const IndexLeaf& indexLeaf, IndexAccessor& idx,
+    // except in a cell with an ambiguous face, where it gets a centre vertex instead. The
+    // cell's crossing edges start in its leaf or in a leaf of idx (both ends are active).
+    void cell(const Coord& origin, const float c[8], const VertexStar& idx,
               const TriangleMesh& mesh, LeafMesh& out) const
     {
         const CellPolygons polygons(c);
@@ -326,13 +370,7 @@ struct Passes
             Coord g = origin;
             for (int a = 0; a < 3; ++a)
                 g[a] += kCorner[kEdges.lowCorner[e]][a];
-            const Coord l = g - indexLeaf.origin();
-            const uint32_t packed =
-                (unsigned(l.x()) | unsigned(l.y()) | unsigned(l.z())) < IndexLeaf::DIM
-                    ? indexLeaf.getValue(IndexLeaf::coordToOffset(l))
-                    : idx.getValue(g);
-            const int axis = kEdges.axis[e];
-            vertex[e] = uint32_t((packed >> 3) + kBitCount[packed & ((1 << axis) - 1)]);
+            vertex[e] = idx.vertex(g - idx.origin, kEdges.axis[e]);
         }
         polygons.forEach([&](const int* polygon, int n) {
             if (!ambiguous || n == 3) {
@@ -392,22 +430,19 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
         voxelized->voxelizeActiveTiles();
         tree = voxelized.get();
     }
-    IndexTree index(*tree, uint32_t(0), openvdb::TopologyCopy());
-    openvdb::tree::LeafManager<IndexTree> leaves(index);
-    Passes passes{*tree, Affine(grid.transform()), index, leaves, ctx, {}, {}, {}};
+    Leaves leaves(*tree);
+    Passes passes{*tree, Affine(grid.transform()), leaves, ctx, {}, {}, {}, {}};
     TriangleMesh mesh;
     passes.readBits();
     passes.markEdges();
-    // a voxel's first vertex number must fit 29 bits beside its 3 edge bits (IndexTree)
-    if (passes.first.back() >= (uint64_t(1) << 29))
-        throw ValueError("the level set has more than 2^29 surface vertices; mesh it in parts");
+    if (passes.first.back() >= kLocalVertex)
+        throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");
     passes.placeVertices(mesh);
     std::vector<LeafMesh> perLeaf;
     const size_t cells = passes.triangulate(perLeaf, mesh);
-    // The index tree (4 bytes a band voxel: 128 MB for a 1.7M-particle frame) and the leaf bits
-    // are done with: free them before the join allocates the mesh's triangles.
-    passes.bits = {}, passes.position = {};
-    index.clear();
+    // The leaf bits and edges are done with: free them before the join allocates the mesh's
+    // triangles.
+    passes.bits = {}, passes.edges = {}, passes.position = {};
     // Join the leaves in order: centre vertices after the edge vertices; each leaf's pieces are
     // freed as they are copied.
     size_t triangles = 0, vertices = mesh.points.size();
