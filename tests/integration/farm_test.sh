@@ -53,7 +53,13 @@ done
 "$BIN" rasterize 'f_{:04}.bgeo' -r 0.01 -o 'ri_{:04}.vdb' --keep-going >ri.out 2>ri.err
 check "rasterize, 3 in flight: the level sets, lines and errors of one at a time" bash -c \
     "for f in 1 2 3 5 6; do cmp -s rn_000\$f.vdb ri_000\$f.vdb || exit 1; done; [ ! -e ri_0004.vdb ] && diff <(sed -e 's/ri_/rn_/' ri.out | sed -E 's/[0-9]+\.[0-9]+ s\$//') <(sed -E 's/[0-9]+\.[0-9]+ s\$//' rn.out) && diff ri.err rn.err"
-rm -f rn_* ri_*
+"$BIN" mesh 'rn_{:04}.vdb' -o 'mn_{:04}.ply' --in-flight 1 >mn.out
+"$BIN" mesh 'rn_{:04}.vdb' -o 'mi_{:04}.ply' --in-flight 8 >mi.out
+"$BIN" post 'k_{:04}.ply' -o 'pn_{:04}.obj' --in-flight 1 >pn.out
+"$BIN" post 'k_{:04}.ply' -o 'pi_{:04}.obj' >pi.out
+check "mesh and post, frames in flight: the meshes and lines of one at a time" bash -c \
+    "for f in 1 2 3 5 6; do cmp -s mn_000\$f.ply mi_000\$f.ply && cmp -s pn_000\$f.obj pi_000\$f.obj || exit 1; done; diff <(sed -e 's/mi_/mn_/' mi.out | sed -E 's/[0-9]+\.[0-9]+ s\$//') <(sed -E 's/[0-9]+\.[0-9]+ s\$//' mn.out) && diff <(sed -e 's/pi_/pn_/' pi.out | sed -E 's/[0-9]+\.[0-9]+ s\$//') <(sed -E 's/[0-9]+\.[0-9]+ s\$//' pn.out) && [ \$(grep -c ' -> ' pi.out) = 5 ]"
+rm -f rn_* ri_* mn_* mi_* pn_* pi_*
 out=$("$BIN" reconstruct 'f_{:04}.bgeo' -r 0.01 -o 'v_{:04}.ply' --raw --frames 1-3 -v)
 check "--in-flight: -v shows a frame's wait for the frames before it" grep -q "^    waiting " <<<"$out"
 expect_error "--in-flight 0 is refused" "--in-flight" \

@@ -35,7 +35,7 @@ struct MeshOptions
     PipelineOptions pipeline;
     SequenceOptions sequence;
     bool dropNonFinite = false;
-    size_t inFlight = 0; ///< reconstruct --in-flight (0: by the threads)
+    size_t inFlight = 0; ///< --in-flight (0: by the threads)
 };
 
 void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o, Makes makes = Makes::MeshedLevelSet)
@@ -45,6 +45,7 @@ void addMeshOutputOptions(CLI::App* cmd, MeshOptions& o, Makes makes = Makes::Me
     cmd->add_option("--frames", o.frames, "frame range A-B for a pattern");
     addRunOptions(cmd, o.pipeline, makes);
     addSequenceOptions(cmd, o.sequence);
+    addInFlightOption(cmd, o.inFlight);
 }
 
 std::vector<FrameJob> planMeshJobs(const MeshOptions& o)
@@ -92,13 +93,30 @@ void writeAndReport(const MeshOptions& o, Context& ctx, const TriangleMesh& mesh
     if (po.check) std::printf("  mesh: %s\n", describe(check).c_str());
 }
 
-/// One frame's mesh from its input file, with counts for its report.
-using MakeMesh = std::function<TriangleMesh(const std::string& input, Context& ctx,
-                                            std::vector<std::pair<std::string, double>>& counts)>;
+/// What mesh and post read of a frame: a level set file or a mesh, and a warning for its line.
+struct MeshInput
+{
+    io::LevelSetFile levelSet;
+    TriangleMesh mesh;
+    std::string warning; ///< printed on stderr before the frame's lines
+};
+using Counts = std::vector<std::pair<std::string, double>>;
+struct MeshFrame : FrameInFlight
+{
+    MeshInput input;
+    TriangleMesh mesh;
+    Counts counts;
+};
+/// A frame's input read from its file (timed as "read"); its mesh made from that input.
+using ReadInput = std::function<void(const std::string& input, Context& ctx, MeshInput& in)>;
+using MakeMesh =
+    std::function<TriangleMesh(const std::string& input, MeshInput& in, Context& ctx, Counts&)>;
 
 /// The frame loop of a command that turns each input file into one mesh (mesh, post): plan,
-/// refuse to overwrite an input, then per frame make, write and report, with a progress bar.
-int runMeshFrames(const MeshOptions& o, const char* name, const MakeMesh& make)
+/// refuse to overwrite an input, then the frames in flight (FramesInFlight.h): read, make,
+/// write and report, with a progress bar.
+int runMeshFrames(const MeshOptions& o, const char* name, const ReadInput& read,
+                  const MakeMesh& make)
 {
     const PipelineOptions& po = o.pipeline;
     const auto jobs = planMeshJobs(o);
@@ -107,21 +125,32 @@ int runMeshFrames(const MeshOptions& o, const char* name, const MakeMesh& make)
     const auto threadLimit = po.setUp(ctx);
     const std::vector<size_t> picked = shardOf(jobs, o.sequence.shard);
     SequenceRun run(o.sequence, po.quiet);
+    std::vector<size_t> todo; // positions in jobs, finished frames left out
+    for (size_t i : picked)
+        if (!run.skip({jobs[i].output})) todo.push_back(i);
     Progress bar(picked.size(), name, po.quiet);
     Report report(po);
-    for (size_t k = 0; k < picked.size(); ++k) {
-        const FrameJob& job = jobs[picked[k]];
-        if (run.skip({job.output})) continue;
-        run.frame(job.input, [&] {
-            bar.update(k, job.input);
-            ctx.timing().clear();
-            std::vector<std::pair<std::string, double>> counts;
-            const TriangleMesh mesh = make(job.input, ctx, counts);
-            io::OutputGroup outputs;
-            writeAndReport(o, ctx, mesh, job, bar.enabled(), report, outputs, counts);
-            stopIfInterrupted(ctx);
-        });
-    }
+    FrameRun fr{po, jobs, todo, o.inFlight, run, bar};
+    FrameSteps<MeshFrame> steps;
+    steps.read = [&](MeshFrame& f) {
+        const auto t = f.ctx.scope("read");
+        read(jobs[f.job].input, f.ctx, f.input);
+    };
+    steps.make = [&](MeshFrame& f) {
+        stopIfInterrupted(f.ctx);
+        f.mesh = make(jobs[f.job].input, f.input, f.ctx, f.counts);
+        f.input.levelSet = io::LevelSetFile(), f.input.mesh = TriangleMesh();
+    };
+    steps.write = [&](MeshFrame& f) {
+        if (!f.input.warning.empty()) std::fprintf(stderr, "%s", f.input.warning.c_str());
+        io::OutputGroup outputs;
+        writeAndReport(o, f.ctx, f.mesh, jobs[f.job], bar.enabled(), report, outputs, f.counts);
+        stopIfInterrupted(f.ctx);
+    };
+    steps.clear = [](MeshFrame& f) {
+        f.input = MeshInput(), f.mesh = TriangleMesh(), f.counts.clear();
+    };
+    runFramesInFlight(fr, steps);
     bar.finish();
     report.finish();
     return run.finish(name, picked.size());
@@ -210,25 +239,23 @@ Runner addMeshCommand(CLI::App& app)
         "meshed adaptively, as reconstruct meshes it (--grid NAME meshes one grid alone).");
     return [o]() {
         const Mesher mesher = mesherFromName(o->pipeline.mesher);
-        return runMeshFrames(*o, "mesh", [&](const std::string& input, Context& ctx, auto& counts) {
-            io::LevelSetFile file;
-            {
-                const auto t = ctx.scope("read");
-                file = io::readLevelSetFile(input, o->grid);
-            }
-            stopIfInterrupted(ctx);
-            if (!file.adaptive.empty()) {
-                AdaptiveMeshStats as;
-                TriangleMesh mesh = meshAdaptiveGrid(file.adaptive, ctx, &as);
-                addAdaptiveCounts(as, counts, true);
+        return runMeshFrames(
+            *o, "mesh",
+            [&](const std::string& input, Context&, MeshInput& in) {
+                in.levelSet = io::readLevelSetFile(input, o->grid);
+            },
+            [&](const std::string&, MeshInput& in, Context& ctx, Counts& counts) {
+                if (!in.levelSet.adaptive.empty()) {
+                    AdaptiveMeshStats as;
+                    TriangleMesh mesh = meshAdaptiveGrid(in.levelSet.adaptive, ctx, &as);
+                    addAdaptiveCounts(as, counts, true);
+                    return mesh;
+                }
+                MeshStats ms;
+                TriangleMesh mesh = meshLevelSet(*in.levelSet.grid, mesher, ctx, &ms);
+                counts.push_back({"surface_cells", double(ms.surfaceCells)});
                 return mesh;
-            }
-            const openvdb::FloatGrid::Ptr grid = file.grid;
-            MeshStats ms;
-            TriangleMesh mesh = meshLevelSet(*grid, mesher, ctx, &ms);
-            counts.push_back({"surface_cells", double(ms.surfaceCells)});
-            return mesh;
-        });
+            });
     };
 }
 
@@ -267,34 +294,30 @@ Runner addPostCommand(CLI::App& app)
                 "kept as creases; a closed, oriented mesh stays so.");
     return [o]() {
         const PostProcessParams post = o->pipeline.resolved().post;
-        return runMeshFrames(*o, "post", [&](const std::string& input, Context& ctx, auto& counts) {
-            TriangleMesh mesh;
-            std::vector<std::string> dropped;
-            {
-                const auto t = ctx.scope("read");
-                mesh = io::readMesh(input, &dropped);
-            }
-            if (!dropped.empty()) {
+        return runMeshFrames(
+            *o, "post",
+            [&](const std::string& input, Context&, MeshInput& in) {
+                std::vector<std::string> dropped;
+                in.mesh = io::readMesh(input, &dropped);
+                if (in.mesh.triangles.empty())
+                    throw InputError(input + ": no triangles to post-process (" +
+                                     std::to_string(in.mesh.points.size()) +
+                                     " vertices: a point cloud, or a file cut short?)");
+                if (dropped.empty()) return;
                 std::string names;
                 for (const std::string& n : dropped)
                     names += (names.empty() ? "" : " ") + n;
-                std::fprintf(stderr,
-                             "fluidsurf: warning: %s: vertex properties %s are not carried "
-                             "through post (reconstruct --attributes evaluates them at the "
-                             "final vertices)\n",
-                             input.c_str(), names.c_str());
-            }
-            if (mesh.triangles.empty())
-                throw InputError(input + ": no triangles to post-process (" +
-                                 std::to_string(mesh.points.size()) +
-                                 " vertices: a point cloud, or a file cut short?)");
-            stopIfInterrupted(ctx);
-            const auto t = ctx.scope("post");
-            PostProcessStats ps;
-            mesh = postProcessMesh(std::move(mesh), post, ctx, &ps);
-            addPostCounts(ps, counts);
-            return mesh;
-        });
+                in.warning = "fluidsurf: warning: " + input + ": vertex properties " + names +
+                             " are not carried through post (reconstruct --attributes "
+                             "evaluates them at the final vertices)\n";
+            },
+            [&](const std::string&, MeshInput& in, Context& ctx, Counts& counts) {
+                const auto t = ctx.scope("post");
+                PostProcessStats ps;
+                TriangleMesh mesh = postProcessMesh(std::move(in.mesh), post, ctx, &ps);
+                addPostCounts(ps, counts);
+                return mesh;
+            });
     };
 }
 
@@ -324,7 +347,6 @@ Runner addReconstructCommand(CLI::App& app)
         ->capture_default_str()
         ->check(CLI::Range(1e-6, 0.5));
     addPostOptions(cmd, o->pipeline);
-    addInFlightOption(cmd, o->inFlight);
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"
@@ -376,10 +398,10 @@ Runner addReconstructCommand(CLI::App& app)
                 todo.push_back(i);
         Progress bar(picked.size(), "reconstruct", po.quiet);
         Report report(po);
-        ParticleRun pr{po, jobs, todo, ro, params, o->inFlight, run, bar};
+        FrameRun pr{po, jobs, todo, o->inFlight, run, bar};
         using Frame = ParticleFrame<ReconstructResult>;
         runParticleFrames<ReconstructResult>(
-            pr,
+            pr, ro, params,
             [&](Frame& f) {
                 const std::string& input = jobs[f.job].input;
                 f.result = reconstruct(f.particles, f.params, f.ctx, input);

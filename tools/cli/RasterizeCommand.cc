@@ -78,10 +78,10 @@ Runner addRasterizeCommand(CLI::App& app)
             RasterizeResult field;
             openvdb::GridPtrVec grids; ///< the level set(s) and the attribute grids
         };
-        ParticleRun pr{po, jobs, todo, ro, params, o->inFlight, run, bar};
+        FrameRun pr{po, jobs, todo, o->inFlight, run, bar};
         using Frame = ParticleFrame<Made>;
         runParticleFrames<Made>(
-            pr,
+            pr, ro, params,
             [&](Frame& f) {
                 checkAttributeNames(f.particles, f.params.attributes); // before the work
                 const Params fp = f.params.fieldParams(f.params.radius);

@@ -1,6 +1,6 @@
 // Sequence.cc
 #include "Sequence.h"
-#include "ParticleFrames.h"
+#include "FramesInFlight.h"
 
 #include <fluidsurf/Error.h>
 

@@ -1,0 +1,109 @@
+// FramesInFlight.h - the frame loop of every command that reads a file, makes something of it
+// and writes it (rasterize, reconstruct, mesh, post): the planned frames less the finished ones,
+// through read, make and write at once (runFrameStages, fluidsurf/Sequence.h). Each frame in
+// flight has its own context (a timing tree per frame) and carries its data from read to write.
+// A frame's error waits in its slot for write, which sees the frames in order: --keep-going,
+// the lines and the reports come as in a run of one frame after the other.
+#pragma once
+
+#include "Frames.h"
+#include "Options.h"
+#include "Progress.h"
+#include "Sequence.h"
+
+#include <fluidsurf/Sequence.h>
+
+#include <algorithm>
+#include <exception>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace fluidsurf {
+namespace cli {
+
+double secondsNow();
+
+/// --in-flight N: frames of a sequence under way at once (0: framesInFlight chooses).
+void addInFlightOption(CLI::App* cmd, size_t& inFlight);
+/// The option's value, or without one: 4 (two frames made at once) where the run has 8 or more
+/// threads (-j, else the cores it may use), else 3.
+size_t framesInFlight(size_t option, int threads);
+
+/// What every frame in flight has; a command's frame type adds its data.
+struct FrameInFlight
+{
+    Context ctx;
+    size_t job = 0; ///< position in the jobs
+    std::exception_ptr error;
+    double stageEnd = 0, waited = 0; ///< seconds: the frame's last stage ended; its waits
+};
+
+/// What the loop shares with its command.
+struct FrameRun
+{
+    const PipelineOptions& options;
+    const std::vector<FrameJob>& jobs;
+    std::vector<size_t> todo; ///< positions in jobs to run, in order
+    size_t inFlight;          ///< --in-flight (0: framesInFlight chooses)
+    SequenceRun& run;
+    Progress& bar;
+};
+
+/// The steps of one frame. prepare (optional) runs before read, outside the frame's errors:
+/// what it throws stops the run. read and make run on a frame alone; write runs in frame order,
+/// one at a time, inside SequenceRun::frame (with the frame's error, if an earlier step failed,
+/// raised there). After write the slot is emptied (Frame{} but for its context).
+template <typename Frame> struct FrameSteps
+{
+    std::function<void(Frame&)> prepare, read, make, write, clear;
+};
+
+template <typename Frame> void runFramesInFlight(FrameRun& r, const FrameSteps<Frame>& steps)
+{
+    std::vector<Frame> slots(std::min(std::max<size_t>(r.todo.size(), 1),
+                                      framesInFlight(r.inFlight, r.options.threads)));
+    auto attempt = [&](Frame& f, const std::function<void(Frame&)>& step) {
+        if (f.error) return;
+        try {
+            forFile(r.jobs[f.job].input, [&] { step(f); });
+        } catch (const Cancelled&) {
+            throw;
+        } catch (...) {
+            f.error = std::current_exception();
+        }
+    };
+    FrameStages stages;
+    stages.read = [&](size_t k, size_t s) {
+        Frame& f = slots[s];
+        r.options.configure(f.ctx);
+        f.ctx.timing().clear();
+        f.job = r.todo[k], f.error = nullptr;
+        if (steps.prepare) steps.prepare(f);
+        attempt(f, steps.read);
+        f.waited = 0, f.stageEnd = secondsNow();
+    };
+    stages.make = [&](size_t, size_t s) {
+        Frame& f = slots[s];
+        f.waited += secondsNow() - f.stageEnd;
+        attempt(f, steps.make);
+        f.stageEnd = secondsNow();
+    };
+    stages.write = [&](size_t k, size_t s) {
+        Frame& f = slots[s];
+        f.waited += secondsNow() - f.stageEnd;
+        // Between its stages a frame waits for the frames before it: shown apart, so that the
+        // frame's line gives its own work.
+        if (slots.size() > 1) f.ctx.timing().add("waiting", f.waited);
+        r.bar.update(k, r.jobs[f.job].input);
+        r.run.frame(r.jobs[f.job].input, [&] {
+            if (f.error) std::rethrow_exception(f.error);
+            steps.write(f);
+        });
+        steps.clear(f);
+    };
+    runFrameStages(r.todo.size(), stages, slots.size());
+}
+
+} // namespace cli
+} // namespace fluidsurf
