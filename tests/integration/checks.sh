@@ -14,3 +14,14 @@ expect_error() {
     if [ "$(grep -c 'fluidsurf: error:' <<<"$out")" -ne 1 ]; then bad "$what: not exactly one error line: $out"; return; fi
     ok
 }
+# signal_after SIGNAL SECONDS ERRFILE CMD...: CMD in the background (stderr to ERRFILE), sent
+# SIGNAL after SECONDS; its exit code in rc
+signal_after() {
+    local sig=$1 secs=$2 err=$3; shift 3
+    "$@" 2>"$err" &
+    local pid=$!
+    sleep "$secs"
+    kill -"$sig" $pid
+    wait $pid
+    rc=$?
+}

@@ -106,12 +106,7 @@ expect_error "adaptive: refused with the gather-full baseline" "narrow-band meth
 for cmd in reconstruct rasterize; do
     out=$T/int_$cmd
     if [ $cmd = reconstruct ]; then args=(-o "$out.obj" --vdb "$out.vdb"); else args=(-o "$out.vdb"); fi
-    "$BIN" $cmd "$T/big.bgeo" -r 0.01 --voxel 0.25 "${args[@]}" -q 2>"$T/int.err" &
-    pid=$!
-    sleep 0.6
-    kill -INT $pid
-    wait $pid
-    rc=$?
+    signal_after INT 0.6 "$T/int.err" "$BIN" $cmd "$T/big.bgeo" -r 0.01 --voxel 0.25 "${args[@]}" -q
     check "$cmd: Ctrl-C exits with 130 (got $rc)" test $rc -eq 130
     check "$cmd: Ctrl-C says so in one line" bash -c "[ \$(wc -l <'$T/int.err') -eq 1 ] && grep -q interrupted '$T/int.err'"
     check "$cmd: Ctrl-C leaves no output and no temporary file" bash -c "! ls '$T' | grep -Eq 'int_|tmp'"

@@ -122,12 +122,7 @@ check "--shard: nothing written by the refused runs" bash -c "! ls x_* x.ply 2>/
 
 # --- Ctrl-C in the middle of a sequence with frames in flight: 130, nothing half-written -----
 for f in 1 2 3 4; do "$BIN" generate drop --count 400000 -r 0.01 --seed $f -o "big_000$f.xyz" >/dev/null; done
-"$BIN" reconstruct 'big_{:04}.xyz' -r 0.01 -o 'b_{:04}.ply' -q 2>b.err &
-pid=$!
-sleep 1.5
-kill -INT $pid
-wait $pid
-rc=$?
+signal_after INT 1.5 b.err "$BIN" reconstruct 'big_{:04}.xyz' -r 0.01 -o 'b_{:04}.ply' -q
 check "sequence: Ctrl-C exits with 130 (got $rc)" test $rc -eq 130
 check "sequence: Ctrl-C says so in one line" bash -c "[ \$(wc -l <b.err) -eq 1 ] && grep -q interrupted b.err"
 check "sequence: Ctrl-C leaves no temporary file, and every mesh it left whole" bash -c \

@@ -120,12 +120,8 @@ while kill -0 $dead 2>/dev/null || [ -d /proc/$dead ]; do dead=$((dead - 1)); do
 echo stale >"$T/.fluidsurf-tmp-$dead-0.x.obj"
 "$BIN" reconstruct "$T/x.ply" -r 0.025 -o "$T/fresh.obj" -q
 check "a killed run's temporary is removed by the next run" test ! -e "$T/.fluidsurf-tmp-$dead-0.x.obj"
-"$BIN" reconstruct "$T/big.bgeo" -r 0.01 --voxel 0.25 -o "$T/term.obj" --vdb "$T/term.vdb" -q 2>"$T/term.err" &
-pid=$!
-sleep 0.6
-kill -TERM $pid
-wait $pid
-rc=$?
+signal_after TERM 0.6 "$T/term.err" \
+    "$BIN" reconstruct "$T/big.bgeo" -r 0.01 --voxel 0.25 -o "$T/term.obj" --vdb "$T/term.vdb" -q
 check "SIGTERM exits with 143 (got $rc)" test $rc -eq 143
 check "SIGTERM leaves no output and no temporary file" bash -c "! ls '$T' | grep -Eq 'term\.(obj|vdb)|tmp'"
 
