@@ -13,7 +13,10 @@
 
 #include <fluidsurf/Sequence.h>
 
+#include <tbb/info.h>
+
 #include <algorithm>
+#include <chrono>
 #include <exception>
 #include <functional>
 #include <string>
@@ -22,13 +25,34 @@
 namespace fluidsurf {
 namespace cli {
 
-double secondsNow();
+/// Seconds on the steady clock: a frame's waits between its stages.
+inline double secondsNow()
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
+        .count();
+}
 
 /// --in-flight N: frames of a sequence under way at once (0: framesInFlight chooses).
-void addInFlightOption(CLI::App* cmd, size_t& inFlight);
+inline void addInFlightOption(CLI::App* cmd, size_t& inFlight)
+{
+    cmd->add_option("--in-flight", inFlight,
+                    "frames of a sequence under way at once: 3 reads frame k+1 and writes frame "
+                    "k-1 while frame k is made; 4 to 8 also make frames at once (each frame in "
+                    "flight holds its particles and results); 1 runs one frame after the other "
+                    "(least memory). Default: 4 with 8 or more threads (-j), else 3")
+        ->check(CLI::Range(1, 8));
+}
+
 /// The option's value, or without one: 4 (two frames made at once) where the run has 8 or more
 /// threads (-j, else the cores it may use), else 3.
-size_t framesInFlight(size_t option, int threads);
+inline size_t framesInFlight(size_t option, int threads)
+{
+    // One frame leaves many cores partly idle (its serial steps, its smaller passes): on 16
+    // cores two frames made at once run 1.7x the frames per second of one (BENCHMARKS.md).
+    if (option > 0) return option;
+    const int cores = tbb::info::default_concurrency(); // the cores this process may use
+    return (threads > 0 ? std::min(threads, cores) : cores) >= 8 ? 4 : 3;
+}
 
 /// What every frame in flight has; a command's frame type adds its data.
 struct FrameInFlight

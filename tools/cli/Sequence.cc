@@ -1,14 +1,9 @@
 // Sequence.cc
 #include "Sequence.h"
-#include "FramesInFlight.h"
 
 #include <fluidsurf/Error.h>
 
 #include <sys/stat.h>
-#include <tbb/info.h>
-
-#include <algorithm>
-#include <chrono>
 
 #include <cstdio>
 #include <cstdlib>
@@ -105,31 +100,6 @@ void chooseSequenceRadiusFrom(const PipelineOptions& po, Context& ctx, const Fra
         throw ValueError("r is chosen from the sequence's first frame, which cannot be read (" +
                          firstLine(e.what()) + "); pass -r");
     }
-}
-
-double secondsNow()
-{
-    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-}
-
-void addInFlightOption(CLI::App* cmd, size_t& inFlight)
-{
-    cmd->add_option("--in-flight", inFlight,
-                    "frames of a sequence under way at once: 3 reads frame k+1 and writes frame "
-                    "k-1 while frame k is made; 4 to 8 also make frames at once (each frame in "
-                    "flight holds its particles and results); 1 runs one frame after the other "
-                    "(least memory). Default: 4 with 8 or more threads (-j), else 3")
-        ->check(CLI::Range(1, 8));
-}
-
-size_t framesInFlight(size_t option, int threads)
-{
-    // One frame leaves many cores partly idle (its serial steps, its smaller passes): on 16
-    // cores two frames made at once run 1.7x the frames per second of one (BENCHMARKS.md).
-    if (option > 0) return option;
-    const int cores = tbb::info::default_concurrency(); // the cores this process may use
-    return (threads > 0 ? std::min(threads, cores) : cores) >= 8 ? 4 : 3;
 }
 
 SequenceRun::SequenceRun(const SequenceOptions& o, bool quiet)
