@@ -69,9 +69,8 @@ openvdb::FloatGrid::Ptr readLevelSetFromMemory(const uint8_t* data, size_t size,
 
 LevelSetFile readLevelSetFile(const std::string& path, const std::string& gridName)
 {
-    const std::vector<uint8_t> bytes = io_internal::readFile(path);
     const openvdb::GridPtrVecPtr grids =
-        io_internal::readVdbGrids(bytes.data(), bytes.size(), path);
+        io_internal::readVdbGrids(io_internal::readFile(path), path);
     LevelSetFile f;
     if (gridName.empty()) f.adaptive = AdaptiveGrid::fromGrids(*grids, path);
     f.grid = f.adaptive.empty() ? pickLevelSet(*grids, path, gridName) : f.adaptive.level2;
@@ -128,9 +127,8 @@ void writeLevelSet(const openvdb::GridPtrVec& grids, const std::string& path)
 
 std::vector<GridDescription> describeVdb(const std::string& path, std::vector<std::string>* skipped)
 {
-    const std::vector<uint8_t> bytes = io_internal::readFile(path);
     const openvdb::GridPtrVecPtr grids =
-        io_internal::readVdbGrids(bytes.data(), bytes.size(), path, skipped);
+        io_internal::readVdbGrids(io_internal::readFile(path), path, skipped);
     std::vector<GridDescription> out;
     for (const openvdb::GridBase::Ptr& g : *grids) {
         GridDescription d;

@@ -46,13 +46,10 @@ std::string shortened(const std::string& s)
     return s.size() > 200 ? s.substr(0, 200) + "..." : s;
 }
 
-} // namespace
-
-openvdb::GridPtrVecPtr readVdbGrids(const uint8_t* data, size_t size, const std::string& src,
-                                    std::vector<std::string>* skipped)
+/// OpenVDB's reading of checked bytes.
+openvdb::GridPtrVecPtr parseVdb(const CheckedVdb& checked, const std::string& src,
+                                std::vector<std::string>* skipped)
 {
-    openvdb::initialize();
-    const CheckedVdb checked = checkVdb(data, size, src);
     if (skipped) *skipped = checked.skipped;
     try {
         MemoryBuf buf(checked.bytes.data(), checked.bytes.size());
@@ -67,6 +64,24 @@ openvdb::GridPtrVecPtr readVdbGrids(const uint8_t* data, size_t size, const std:
     } catch (const std::exception& e) {
         throw InputError(src + ": cannot read VDB: " + shortened(e.what()));
     }
+}
+
+} // namespace
+
+openvdb::GridPtrVecPtr readVdbGrids(const uint8_t* data, size_t size, const std::string& src,
+                                    std::vector<std::string>* skipped)
+{
+    openvdb::initialize();
+    return parseVdb(checkVdb(data, size, src), src, skipped);
+}
+
+openvdb::GridPtrVecPtr readVdbGrids(std::vector<uint8_t>&& file, const std::string& src,
+                                    std::vector<std::string>* skipped)
+{
+    openvdb::initialize();
+    CheckedVdb checked = checkVdb(file.data(), file.size(), src);
+    std::vector<uint8_t>().swap(file);
+    return parseVdb(checked, src, skipped);
 }
 
 } // namespace io_internal

@@ -16,6 +16,10 @@ namespace io_internal {
 /// cannot check (other tree types, frustum transforms) are left out and listed in skipped.
 openvdb::GridPtrVecPtr readVdbGrids(const uint8_t* data, size_t size, const std::string& src,
                                     std::vector<std::string>* skipped = nullptr);
+/// The same for a whole file's bytes, freed once checked: the check's copy is what OpenVDB
+/// reads, so a file is held once, not twice, while its grids are built.
+openvdb::GridPtrVecPtr readVdbGrids(std::vector<uint8_t>&& file, const std::string& src,
+                                    std::vector<std::string>* skipped = nullptr);
 
 } // namespace io_internal
 } // namespace fluidsurf
