@@ -296,9 +296,8 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
     size_t idle = 0;               // passes in a row without a collapse
     double rankFactor = 3;         // collapses under the threshold per collapse made
     std::vector<uint32_t> valence; // each point's triangles
-    std::vector<uint8_t> touched(s.points.size(), 0); // see BlockResult::touched
-    tbb::enumerable_thread_specific<std::vector<uint32_t>> localOf(
-        std::vector<uint32_t>(s.points.size(), kNone)); // see Block
+    std::vector<uint8_t> touched(s.points.size(), 0);      // see BlockResult::touched
+    tbb::enumerable_thread_specific<LocalNumbers> localOf; // see Block
     for (size_t pass = 0; pass < kMaxPasses; ++pass) {
         const size_t n = s.triangles.size();
         const bool countTarget = target.triangles > 0;
