@@ -54,6 +54,13 @@ inline size_t framesInFlight(size_t option, int threads)
     return (threads > 0 ? std::min(threads, cores) : cores) >= 8 ? 4 : 3;
 }
 
+/// A frame's own work, seconds: its timing tree's total less its waits for the frames before it
+/// (call after ctx.timing().finish()).
+inline double frameSeconds(const Context& ctx)
+{
+    return ctx.timing().root().seconds - ctx.timing().seconds("waiting");
+}
+
 /// What every frame in flight has; a command's frame type adds its data.
 struct FrameInFlight
 {

@@ -19,7 +19,6 @@
 #include <fluidsurf/io/MeshIO.h>
 #include <fluidsurf/io/ParticleIO.h>
 
-#include <algorithm>
 #include <cstdio>
 #include <functional>
 #include <memory>
@@ -81,7 +80,7 @@ void writeAndReport(const MeshOptions& o, Context& ctx, const TriangleMesh& mesh
     if (!po.quiet && !bar)
         std::printf("%s -> %s: %zu vertices, %zu triangles, %.3f s\n", job.input.c_str(),
                     job.output.c_str(), mesh.points.size(), mesh.triangles.size(),
-                    ctx.timing().root().seconds - ctx.timing().seconds("waiting"));
+                    frameSeconds(ctx));
     if (po.check) {
         const auto more = meshCounts(check);
         counts.insert(counts.end(), more.begin(), more.end());
@@ -125,9 +124,8 @@ int runMeshFrames(const MeshOptions& o, const char* name, const ReadInput& read,
     const auto threadLimit = po.setUp(ctx);
     const std::vector<size_t> picked = shardOf(jobs, o.sequence.shard);
     SequenceRun run(o.sequence, po.quiet);
-    std::vector<size_t> todo; // positions in jobs, finished frames left out
-    for (size_t i : picked)
-        if (!run.skip({jobs[i].output})) todo.push_back(i);
+    const std::vector<size_t> todo =
+        run.unfinished(picked, [&](size_t i) { return std::vector<std::string>{jobs[i].output}; });
     Progress bar(picked.size(), name, po.quiet);
     Report report(po);
     FrameRun fr{po, jobs, todo, o.inFlight, run, bar};
@@ -390,12 +388,10 @@ Runner addReconstructCommand(CLI::App& app)
         prepareDevice(ctx.device());
         const std::vector<size_t> picked = shardOf(jobs, o->sequence.shard);
         SequenceRun run(o->sequence, po.quiet);
-        std::vector<size_t> todo; // positions in jobs, skipped frames left out
-        for (size_t i : picked)
-            if (!run.skip(vdbJobs.empty()
-                              ? std::vector<std::string>{jobs[i].output}
-                              : std::vector<std::string>{jobs[i].output, vdbJobs[i].output}))
-                todo.push_back(i);
+        const std::vector<size_t> todo = run.unfinished(picked, [&](size_t i) {
+            return vdbJobs.empty() ? std::vector<std::string>{jobs[i].output}
+                                   : std::vector<std::string>{jobs[i].output, vdbJobs[i].output};
+        });
         Progress bar(picked.size(), "reconstruct", po.quiet);
         Report report(po);
         FrameRun pr{po, jobs, todo, o->inFlight, run, bar};

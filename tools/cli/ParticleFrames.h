@@ -31,7 +31,6 @@ void runParticleFrames(FrameRun& r, const io::ReadOptions& read, ReconstructPara
             chooseSequenceRadiusFrom(r.options, f.ctx, r.jobs[0], read, params);
             radiusChosen = true;
         }
-        f.params = params;
     };
     steps.read = [&](Frame& f) {
         f.particles = readFrame(r.options, f.ctx, r.jobs[f.job].input, read, f.readInfo,

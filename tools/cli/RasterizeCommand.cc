@@ -68,9 +68,8 @@ Runner addRasterizeCommand(CLI::App& app)
         prepareDevice(ctx.device());
         const std::vector<size_t> picked = shardOf(jobs, o->sequence.shard);
         SequenceRun run(o->sequence, po.quiet);
-        std::vector<size_t> todo; // positions in jobs, finished frames left out
-        for (size_t i : picked)
-            if (!run.skip({jobs[i].output})) todo.push_back(i);
+        const std::vector<size_t> todo = run.unfinished(
+            picked, [&](size_t i) { return std::vector<std::string>{jobs[i].output}; });
         Progress bar(picked.size(), "rasterize", po.quiet);
         Report report(po);
         struct Made
@@ -109,8 +108,7 @@ Runner addRasterizeCommand(CLI::App& app)
                         "%zu active voxels, %.3f s\n",
                         job.input.c_str(), job.output.c_str(), s.particles, s.surface, s.splash,
                         s.isolated, f.params.field.keepIsolated ? " kept" : " left out",
-                        s.activeVoxels,
-                        f.ctx.timing().root().seconds - f.ctx.timing().seconds("waiting"));
+                        s.activeVoxels, frameSeconds(f.ctx));
                     if (f.readInfo.droppedNonFinite)
                         std::printf("  %zu non-finite particles dropped\n",
                                     f.readInfo.droppedNonFinite);

@@ -118,6 +118,16 @@ bool SequenceRun::skip(const std::vector<std::string>& outputs)
     return true;
 }
 
+std::vector<size_t>
+SequenceRun::unfinished(const std::vector<size_t>& picked,
+                        const std::function<std::vector<std::string>(size_t job)>& outputsOf)
+{
+    std::vector<size_t> todo;
+    for (size_t i : picked)
+        if (!skip(outputsOf(i))) todo.push_back(i);
+    return todo;
+}
+
 void SequenceRun::failed(const std::string& input, const std::string& why)
 {
     mFailed.emplace_back(input, firstLine(why));

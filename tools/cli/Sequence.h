@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -49,6 +50,10 @@ public:
     /// With --skip-existing, whether a frame is done already: every one of its outputs exists
     /// (outputs are written whole, through a temporary file, or not at all). Counts it.
     bool skip(const std::vector<std::string>& outputs);
+    /// The positions in picked whose frames are not done already (skip), in order.
+    std::vector<size_t>
+    unfinished(const std::vector<size_t>& picked,
+               const std::function<std::vector<std::string>(size_t job)>& outputsOf);
 
     /// Runs one frame's work. Ctrl-C stops the run. Another error stops it too, unless
     /// --keep-going: then it is printed on stderr at once and listed by finish().

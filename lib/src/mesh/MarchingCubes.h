@@ -5,8 +5,9 @@
 // not depend on the thread count:
 //  1. crossing edges: for every active voxel, which of its +x/+y/+z edges (to an active
 //     neighbour) change sign; counted per leaf, prefix-summed into vertex numbers;
-//  2. one vertex per crossing edge (linear interpolation, normal from the gradient), its number
-//     stored in an index tree with the band's topology so any cell can find it;
+//  2. one vertex per crossing edge (linear interpolation, normal from the gradient), numbered
+//     leaf by leaf and voxel by voxel, so that any cell finds its vertices by counting the
+//     crossing-edge bits before them (a few popcounts; 224 bytes a leaf);
 //  3. triangles: every cell whose 8 corners are active and whose signs differ. Its polygons are
 //     traced from face segments (ambiguous faces by the bilinear saddle value) and fanned (around
 //     a centre vertex in cells with an ambiguous face).
