@@ -9,6 +9,10 @@
 #include <iostream>
 #include <string>
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 namespace {
 
 /// The message as one line of UTF-8 text: names read from a corrupt file can hold newlines,
@@ -42,6 +46,13 @@ std::string oneLine(const std::string& s)
 int main(int argc, char** argv)
 {
     using namespace fluidsurf;
+#ifdef __GLIBC__
+    // Arrays of a MiB and more are mapped and unmapped whole. glibc's default raises that
+    // threshold to the largest block freed so far (up to 32 MiB), after which the stages'
+    // large arrays come from the heap and their holes stay resident: 40 MB more peak on the
+    // 1.7M-particle frame, for ~1% more time (fresh pages).
+    mallopt(M_MMAP_THRESHOLD, 1 << 20);
+#endif
     CLI::App app{"fluidsurf " FLUIDSURF_VERSION_STRING
                  " - SPH particle frames to OpenVDB level sets and triangle meshes"};
     app.set_version_flag("--version", std::string("fluidsurf ") + FLUIDSURF_VERSION_STRING);

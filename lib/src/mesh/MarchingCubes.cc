@@ -450,7 +450,10 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
         triangles += l.triangles.size(), vertices += l.points.size();
     if (vertices >= kLocalVertex)
         throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");
+    // exact sizes: grown by appending, the points and normals kept up to twice their bytes
+    // (46 MB of slack on the 1.7M-particle frame, carried through post-processing)
     mesh.triangles.reserve(triangles);
+    mesh.points.reserve(vertices), mesh.normals.reserve(vertices);
     for (LeafMesh& l : perLeaf) {
         const uint32_t base = uint32_t(mesh.points.size());
         for (auto t : l.triangles) {

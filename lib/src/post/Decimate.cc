@@ -81,21 +81,23 @@ State makeState(TriangleMesh& mesh)
             return a;
         });
     if (nv > 0) s.middle = (bounds.first + bounds.second) * 0.5;
+    // The input's points and normals go before the vertex -> triangle table and the quadrics
+    // are allocated: 24 bytes a vertex less at the peak.
+    mesh.normals = {}; // not used here (the result gets new ones)
     s.points.resize(nv);
-    // not zeroed: filled below in parallel, where its pages are first touched
-    s.quadrics.reset(new Quadric[nv]);
-    // each vertex gathers the planes of its triangles, weighted by area, in triangle order: the
-    // same sums every run
-    const VertexTriangles around(mesh);
-    s.triangles = std::move(mesh.triangles);
-    mesh.normals = {}; // not used here (the result gets new ones): 12 bytes a vertex back
-    s.refused.assign(s.triangles.size(), 0);
-    s.drift.assign(nv, 0.f);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v)
             s.points[v] = toVec3d(mesh.points[v]) - s.middle;
     });
     mesh.points = {}; // s.points has them
+    s.triangles = std::move(mesh.triangles);
+    s.refused.assign(s.triangles.size(), 0);
+    s.drift.assign(nv, 0.f);
+    // each vertex gathers the planes of its triangles, weighted by area, in triangle order: the
+    // same sums every run
+    const VertexTriangles around(s.triangles, nv);
+    // not zeroed: filled below in parallel, where its pages are first touched
+    s.quadrics.reset(new Quadric[nv]);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
             Quadric q{};
@@ -197,18 +199,21 @@ Shares shareOut(const State& s, const Blocks& blocks, double maxError, size_t ne
     const std::vector<uint32_t>& tris = blocks.tris;
     const std::vector<size_t>& blockStart = blocks.start;
     Shares sh{maxError, true, std::vector<size_t>(nb, 0)};
-    std::vector<float> errors; // by block order; infinite where not sampled
+    // the sampled edges' errors, by block order (3 for the i-th sampled triangle in block
+    // order, the kSample * i-th): infinite for an edge left to its other triangle
+    std::vector<float> errors;
     if (!last) {
-        errors.assign(3 * n, std::numeric_limits<float>::infinity());
-        tbb::parallel_for(
-            tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
-                for (size_t i = r.begin(); i != r.end(); ++i)
-                    for (int k = 0; k < 3 && i % kSample == 0; ++k) {
-                        const Tri& t = s.triangles[tris[i]];
-                        if (t[k] < t[(k + 1) % 3])
-                            errors[3 * i + k] = float(bestCollapse(s, t[k], t[(k + 1) % 3]).error);
-                    }
-            });
+        errors.assign(3 * ((n + kSample - 1) / kSample), std::numeric_limits<float>::infinity());
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, errors.size() / 3),
+                          [&](const tbb::blocked_range<size_t>& r) {
+                              for (size_t i = r.begin(); i != r.end(); ++i)
+                                  for (int k = 0; k < 3; ++k) {
+                                      const Tri& t = s.triangles[tris[kSample * i]];
+                                      if (t[k] < t[(k + 1) % 3])
+                                          errors[3 * i + k] =
+                                              float(bestCollapse(s, t[k], t[(k + 1) % 3]).error);
+                                  }
+                          });
         std::vector<float> sorted;
         sorted.reserve(3 * n / 2 / kSample);
         for (float e : errors)
@@ -227,7 +232,9 @@ Shares shareOut(const State& s, const Blocks& blocks, double maxError, size_t ne
                 for (size_t i = blockStart[b]; i < blockStart[b + 1]; ++i)
                     under[b] += size_t(__builtin_popcount(~s.refused[tris[i]] & 7u));
             else
-                for (size_t i = 3 * blockStart[b]; i < 3 * blockStart[b + 1]; ++i)
+                // the block's sampled triangles: kSample * i in [start, next start)
+                for (size_t i = 3 * ((blockStart[b] + kSample - 1) / kSample);
+                     i < 3 * ((blockStart[b + 1] + kSample - 1) / kSample); ++i)
                     under[b] += errors[i] <= sh.threshold;
     });
     size_t total = 0;
@@ -336,6 +343,8 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
             tbb::blocked_range<size_t>(0, nb, 1), [&](const tbb::blocked_range<size_t>& r) {
                 for (size_t b = r.begin(); b != r.end(); ++b) {
                     if (budget[b] == 0) {
+                        results[b].triangles.reserve(blockStart[b + 1] - blockStart[b]);
+                        results[b].remembered.reserve(blockStart[b + 1] - blockStart[b]);
                         for (size_t i = blockStart[b]; i < blockStart[b + 1]; ++i) {
                             results[b].triangles.push_back(s.triangles[tris[i]]);
                             results[b].remembered.push_back(s.refused[tris[i]]);

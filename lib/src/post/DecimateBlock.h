@@ -209,6 +209,9 @@ public:
                 ++out.refused;
             }
         }
+        // exact sizes: a pass holds every block's result at once
+        const size_t alive = mTris.size() - 2 * out.collapses;
+        out.triangles.reserve(alive), out.remembered.reserve(alive);
         for (size_t t = 0; t < mTris.size(); ++t)
             if (mTriAlive[t]) {
                 out.triangles.push_back(

@@ -16,17 +16,23 @@ namespace fluidsurf {
 namespace post {
 
 VertexTriangles::VertexTriangles(const TriangleMesh& mesh)
+    : VertexTriangles(mesh.triangles, mesh.points.size())
 {
-    start.assign(mesh.points.size() + 1, 0);
-    for (const auto& t : mesh.triangles)
+}
+
+VertexTriangles::VertexTriangles(const std::vector<std::array<uint32_t, 3>>& triangles,
+                                 size_t points)
+{
+    start.assign(points + 1, 0);
+    for (const auto& t : triangles)
         for (uint32_t v : t)
             ++start[v + 1];
     for (size_t v = 0; v + 1 < start.size(); ++v)
         start[v + 1] += start[v];
     tris.resize(start.back());
     std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-    for (size_t t = 0; t < mesh.triangles.size(); ++t)
-        for (uint32_t v : mesh.triangles[t])
+    for (size_t t = 0; t < triangles.size(); ++t)
+        for (uint32_t v : triangles[t])
             tris[fill[v]++] = uint32_t(t);
 }
 

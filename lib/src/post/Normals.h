@@ -23,6 +23,8 @@ struct VertexTriangles
     std::vector<uint32_t> start; ///< vertex v's triangles are tris[start[v], start[v + 1])
     std::vector<uint32_t> tris;
     explicit VertexTriangles(const TriangleMesh& mesh);
+    /// The same for `points` vertices (a mesh whose points live elsewhere).
+    VertexTriangles(const std::vector<std::array<uint32_t, 3>>& triangles, size_t points);
 };
 
 /// mesh.normals from the triangles around each vertex, each weighted by its angle at the vertex
