@@ -97,7 +97,7 @@ State makeState(TriangleMesh& mesh)
     // same sums every run
     const VertexTriangles around(s.triangles, nv);
     // not zeroed: filled below in parallel, where its pages are first touched
-    s.quadrics.reset(new Quadric[nv]);
+    s.quadrics.reset(new PackedQuadric[nv]);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
             Quadric q{};
@@ -105,9 +105,9 @@ State makeState(TriangleMesh& mesh)
                 const Tri& t = s.triangles[around.tris[i]];
                 const Vec3d n = sideCross(s.points, t);
                 const double len = n.length();
-                if (len > 0) q += Quadric::plane(n / len, s.points[t[0]], len / 2);
+                if (len > 0) q += Quadric::plane(n / len, s.points[t[0]] - s.points[v], len / 2);
             }
-            s.quadrics[v] = q;
+            s.quadrics[v] = PackedQuadric::pack(q); // relative to the point: see State
         }
     });
     return s;

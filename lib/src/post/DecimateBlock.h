@@ -58,13 +58,15 @@ inline const double kMaxTurnCos2 = kMaxTurnCos * kMaxTurnCos; ///< the turn guar
 /// angle (<= 60 deg) has sin^2 = |n|^2 shortest^2 / (a^2 b^2 c^2), |n| twice its area.
 inline const double kThinSin2 = std::pow(std::sin(kThinAngleDegrees * M_PI / 180), 2);
 
-/// The whole mesh between passes, points relative to the middle of its bounds so that the
-/// quadrics' constants stay small and their errors exact to many digits.
+/// The whole mesh between passes, points relative to the middle of its bounds.
 struct State
 {
     Vec3d middle{0.0}; ///< of the input's bounds
     std::vector<Vec3d> points;
-    std::unique_ptr<Quadric[]> quadrics; ///< one a point (see makeState)
+    /// One a point, relative to it (see makeState): the planes of the input triangles it
+    /// stands for. Packed in floats: the largest array here (a double one was 169 MB on the
+    /// 1.7M-particle frame).
+    std::unique_ptr<PackedQuadric[]> quadrics;
     /// How far each vertex may be from the input surface it stands for: 0 for an input vertex;
     /// a collapse adds its point's largest distance to the planes of the triangles it replaces
     /// to the larger drift of its two ends (an upper bound along the normals, where the
@@ -82,11 +84,19 @@ struct Collapse
     double error; ///< area-weighted mean squared distance to the planes
 };
 
+/// The planes of a and b, their origin moved to `to`.
+inline Quadric mergedQuadric(const State& s, uint32_t a, uint32_t b, const Vec3d& to)
+{
+    return s.quadrics[a].unpack().movedTo(to - s.points[a]) +
+           s.quadrics[b].unpack().movedTo(to - s.points[b]);
+}
+
 inline Collapse bestCollapse(const State& s, uint32_t a, uint32_t b)
 {
-    const Quadric q = s.quadrics[a] + s.quadrics[b];
-    const Vec3d p = q.minimizer((s.points[a] + s.points[b]) * 0.5);
-    return {p, q.w > 0 ? q.error(p) / q.w : 0.0};
+    const Vec3d middle = (s.points[a] + s.points[b]) * 0.5;
+    const Quadric q = mergedQuadric(s, a, b, middle);
+    const Vec3d x = q.minimizer(Vec3d(0.0)); // from the middle
+    return {middle + x, q.w > 0 ? q.error(x) / q.w : 0.0};
 }
 
 struct BlockResult
@@ -433,9 +443,10 @@ private:
         error = col.error;
 
         // commit: b merges into a
+        mS.quadrics[mGlobal[a]] =
+            PackedQuadric::pack(mergedQuadric(mS, mGlobal[a], mGlobal[b], col.point));
         point(a) = col.point;
         mS.drift[mGlobal[a]] = float(drift);
-        mS.quadrics[mGlobal[a]] += mS.quadrics[mGlobal[b]];
         mTriAlive[shared[0]] = mTriAlive[shared[1]] = 0;
         const uint32_t start = uint32_t(mRefs.size());
         for (uint32_t t : mTa)

@@ -37,6 +37,18 @@ struct Quadric
     }
     Quadric operator+(const Quadric& o) const { return Quadric(*this) += o; }
 
+    /// The same planes with the origin moved to d: the quadric of x -> (this)(x + d).
+    Quadric movedTo(const Vec3d& d) const
+    {
+        Quadric q = *this;
+        const double g0 = a00 * d[0] + a01 * d[1] + a02 * d[2] + b0, // A d + b
+            g1 = a01 * d[0] + a11 * d[1] + a12 * d[2] + b1,
+                     g2 = a02 * d[0] + a12 * d[1] + a22 * d[2] + b2;
+        q.c = error(d); // (unclamped would do as well: it is >= 0 up to rounding)
+        q.b0 = g0, q.b1 = g1, q.b2 = g2;
+        return q;
+    }
+
     /// Weighted sum of squared distances from p to the planes.
     double error(const Vec3d& p) const
     {
@@ -66,6 +78,32 @@ struct Quadric
         const double inv = 1 / det; // one division: the decimation's hottest line
         return Vec3d((c00 * r0 + c01 * r1 + c02 * r2) * inv, (c01 * r0 + c11 * r1 + c12 * r2) * inv,
                      (c02 * r0 + c12 * r1 + c22 * r2) * inv);
+    }
+};
+
+/// A quadric kept in 44 bytes instead of 88, for one a vertex: floats, per unit of weight
+/// (means of n n^T, d n and d^2, so that no scene's scale leaves float's range) and relative
+/// to the vertex's own point (so that d is a fraction of an edge, not a distance across the
+/// scene: floats' 7 digits then hold the errors that decide the collapses to about 1e-6).
+struct PackedQuadric
+{
+    float w;
+    float a00, a01, a02, a11, a12, a22, b0, b1, b2, c;
+
+    /// q, whose origin is the vertex's point.
+    static PackedQuadric pack(const Quadric& q)
+    {
+        const double s = q.w > 0 ? 1 / q.w : 0;
+        return {float(q.w),       float(q.a00 * s), float(q.a01 * s), float(q.a02 * s),
+                float(q.a11 * s), float(q.a12 * s), float(q.a22 * s), float(q.b0 * s),
+                float(q.b1 * s),  float(q.b2 * s),  float(q.c * s)};
+    }
+    /// The quadric, its origin the vertex's point.
+    Quadric unpack() const
+    {
+        const double s = w;
+        return {a00 * s, a01 * s, a02 * s, a11 * s, a12 * s, a22 * s,
+                b0 * s,  b1 * s,  b2 * s,  c * s,   s};
     }
 };
 
