@@ -36,11 +36,15 @@ Classified classifyOnCpu(const Particles& particles, const Params& params, Conte
 
 neighbors::CellIndex fieldParticles(Classified&& c, const Params& params)
 {
-    if (!c.classes.isolated || params.keepIsolated) return std::move(c.index);
-    std::vector<uint8_t> keep(c.classes.classes.size());
-    for (size_t i = 0; i < keep.size(); ++i)
-        keep[i] = c.classes.classes[i] != classify::Isolated;
-    return neighbors::selectParticles(c.index, keep);
+    if (c.classes.isolated && !params.keepIsolated) {
+        std::vector<uint8_t> keep(c.classes.classes.size());
+        for (size_t i = 0; i < keep.size(); ++i)
+            keep[i] = c.classes.classes[i] != classify::Isolated;
+        neighbors::keepParticles(c.index, keep); // in place: no second index
+    }
+    neighbors::CellIndex out = std::move(c.index);
+    c = Classified(); // the classes, held through the field otherwise
+    return out;
 }
 
 namespace {
@@ -54,6 +58,9 @@ public:
                     double width, Context& ctx, Band& out) override
     {
         Classified c = classifyOnCpu(particles, params, ctx, out);
+        // only the classes go on (to the band and the field's particles): the neighbour counts
+        // and colour fields (12 bytes a particle) are given back before the band's values
+        c.classes.neighbours = {}, c.classes.colorField = {}, c.classes.colorGradient = {};
         {
             const auto t = ctx.scope("narrow band");
             const openvdb::MaskTree::Ptr band =

@@ -22,6 +22,7 @@ Classified classifyOnCpu(const Particles& particles, const Params& params, Conte
                          bool withNormals = false);
 
 /// The index without its isolated particles (they take no part in the field), unless kept.
+/// c is left empty: its index and classes are given back before the field is evaluated.
 neighbors::CellIndex fieldParticles(Classified&& c, const Params& params);
 
 } // namespace backend

@@ -156,29 +156,33 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
     return index;
 }
 
+void keepParticles(CellIndex& index, const std::vector<uint8_t>& keep)
+{
+    // kept particles and cells move down: each is written at or before where it is read
+    const bool radii = !index.radii.empty();
+    size_t n = 0, cells = 0;
+    for (size_t c = 0; c < index.keys.size(); ++c) {
+        const size_t before = n;
+        for (uint32_t i = index.starts[c]; i < index.starts[c + 1]; ++i) {
+            if (!keep[i]) continue;
+            index.positions[n] = index.positions[i];
+            index.order[n] = index.order[i];
+            if (radii) index.radii[n] = index.radii[i];
+            ++n;
+        }
+        if (n > before) index.keys[cells] = index.keys[c], index.starts[cells++] = uint32_t(before);
+    }
+    index.positions.resize(n), index.order.resize(n);
+    if (radii) index.radii.resize(n);
+    index.keys.resize(cells), index.starts.resize(cells);
+    index.starts.push_back(uint32_t(n));
+    index.buildLookup();
+}
+
 CellIndex selectParticles(const CellIndex& in, const std::vector<uint8_t>& keep)
 {
-    CellIndex out;
-    out.cellSize = in.cellSize;
-    for (int a = 0; a < 3; ++a) {
-        out.origin[a] = in.origin[a];
-        out.dims[a] = in.dims[a];
-    }
-    for (size_t c = 0; c < in.keys.size(); ++c) {
-        const size_t before = out.positions.size();
-        for (uint32_t i = in.starts[c]; i < in.starts[c + 1]; ++i) {
-            if (!keep[i]) continue;
-            out.positions.push_back(in.positions[i]);
-            out.order.push_back(in.order[i]);
-            if (!in.radii.empty()) out.radii.push_back(in.radii[i]);
-        }
-        if (out.positions.size() > before) {
-            out.keys.push_back(in.keys[c]);
-            out.starts.push_back(uint32_t(before));
-        }
-    }
-    out.starts.push_back(uint32_t(out.positions.size()));
-    out.buildLookup();
+    CellIndex out = in;
+    keepParticles(out, keep);
     return out;
 }
 

@@ -122,7 +122,7 @@ struct Run
             std::vector<uint8_t> keep(c.classes.classes.size());
             for (size_t i = 0; i < keep.size(); ++i)
                 keep[i] = c.classes.classes[i] != classify::Isolated;
-            c.index = neighbors::selectParticles(c.index, keep);
+            neighbors::keepParticles(c.index, keep);
             classify::selectClasses(c.classes, keep);
             classify::selectInPlace(kappa, keep);
         }

@@ -40,12 +40,11 @@ struct Quadric
     /// The same planes with the origin moved to d: the quadric of x -> (this)(x + d).
     Quadric movedTo(const Vec3d& d) const
     {
-        Quadric q = *this;
-        const double g0 = a00 * d[0] + a01 * d[1] + a02 * d[2] + b0, // A d + b
-            g1 = a01 * d[0] + a11 * d[1] + a12 * d[2] + b1,
-                     g2 = a02 * d[0] + a12 * d[1] + a22 * d[2] + b2;
-        q.c = error(d); // (unclamped would do as well: it is >= 0 up to rounding)
-        q.b0 = g0, q.b1 = g1, q.b2 = g2;
+        Quadric q = *this; // A stays; b becomes A d + b, c the error at d
+        q.b0 = a00 * d[0] + a01 * d[1] + a02 * d[2] + b0;
+        q.b1 = a01 * d[0] + a11 * d[1] + a12 * d[2] + b1;
+        q.b2 = a02 * d[0] + a12 * d[1] + a22 * d[2] + b2;
+        q.c = error(d);
         return q;
     }
 
