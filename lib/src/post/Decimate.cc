@@ -83,13 +83,13 @@ State makeState(TriangleMesh& mesh)
     if (nv > 0) s.middle = (bounds.first + bounds.second) * 0.5;
     // The input's points and normals go before the vertex -> triangle table and the quadrics
     // are allocated: 24 bytes a vertex less at the peak.
-    mesh.normals = {}; // not used here (the result gets new ones)
+    std::vector<Vec3f>().swap(mesh.normals); // not used here (the result gets new ones)
     s.points.resize(nv);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v)
             s.points[v] = toVec3d(mesh.points[v]) - s.middle;
     });
-    mesh.points = {}; // s.points has them
+    std::vector<Vec3f>().swap(mesh.points); // s.points has them
     s.triangles = std::move(mesh.triangles);
     s.refused.assign(s.triangles.size(), 0);
     s.drift.assign(nv, 0.f);
@@ -343,12 +343,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
             tbb::blocked_range<size_t>(0, nb, 1), [&](const tbb::blocked_range<size_t>& r) {
                 for (size_t b = r.begin(); b != r.end(); ++b) {
                     if (budget[b] == 0) {
-                        results[b].triangles.reserve(blockStart[b + 1] - blockStart[b]);
-                        results[b].remembered.reserve(blockStart[b + 1] - blockStart[b]);
-                        for (size_t i = blockStart[b]; i < blockStart[b + 1]; ++i) {
-                            results[b].triangles.push_back(s.triangles[tris[i]]);
-                            results[b].remembered.push_back(s.refused[tris[i]]);
-                        }
+                        results[b].alive = blockStart[b + 1] - blockStart[b]; // as they are
                         continue;
                     }
                     Block block(s, &tris[blockStart[b]], blockStart[b + 1] - blockStart[b], valence,
@@ -364,19 +359,23 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
             st.refused += r.refused;
             st.maxError = std::max(st.maxError, r.maxError);
             st.maxDrift = std::max(st.maxDrift, r.maxDrift);
-            offset[b + 1] = offset[b] + r.triangles.size();
+            offset[b + 1] = offset[b] + r.alive;
             for (uint32_t v : r.touched)
                 touched[v] = 1;
         }
-        s.triangles.resize(offset[nb]);
-        s.refused.resize(offset[nb]);
+        // the blocks' triangles left, gathered in block order
+        std::vector<Tri> next(offset[nb]);
+        std::vector<uint8_t> nextRefused(offset[nb]);
         tbb::parallel_for(size_t(0), nb, [&](size_t b) {
-            std::copy(results[b].triangles.begin(), results[b].triangles.end(),
-                      s.triangles.begin() + std::ptrdiff_t(offset[b]));
-            std::copy(results[b].remembered.begin(), results[b].remembered.end(),
-                      s.refused.begin() + std::ptrdiff_t(offset[b]));
-            results[b] = BlockResult();
+            for (size_t i = 0; i < results[b].alive; ++i) {
+                next[offset[b] + i] = s.triangles[tris[blockStart[b] + i]];
+                nextRefused[offset[b] + i] = s.refused[tris[blockStart[b] + i]];
+            }
         });
+        s.triangles.swap(next);
+        s.refused.swap(nextRefused);
+        std::vector<Tri>().swap(next); // (not `next = {}`: that keeps the capacity)
+        std::vector<uint8_t>().swap(nextRefused);
         forgetTouched(s, touched);
         st.collapses += collapses;
         st.passes = pass + 1;

@@ -101,8 +101,9 @@ inline Collapse bestCollapse(const State& s, uint32_t a, uint32_t b)
 
 struct BlockResult
 {
-    std::vector<Tri> triangles;      ///< what is left of the block's triangles
-    std::vector<uint8_t> remembered; ///< theirs (State::refused)
+    /// What is left of the block's triangles, with their State::refused: written over the
+    /// block's own first `alive` triangles (in the block's order), in place in State.
+    size_t alive = 0;
     /// Vertices the block does not own that its collapses touched: their remembered refusals
     /// in other blocks are forgotten after the pass.
     std::vector<uint32_t> touched;
@@ -152,7 +153,7 @@ public:
     /// `local`: one per thread.
     Block(State& s, const uint32_t* tris, size_t n, const std::vector<uint32_t>& valence,
           LocalNumbers& local)
-        : mS(s)
+        : mS(s), mSlots(tris)
     {
         // local vertices in the order they first appear in the block's triangles (which are in
         // mesh order): the same numbering every run, without a sort
@@ -219,14 +220,14 @@ public:
                 ++out.refused;
             }
         }
-        // exact sizes: a pass holds every block's result at once
-        const size_t alive = mTris.size() - 2 * out.collapses;
-        out.triangles.reserve(alive), out.remembered.reserve(alive);
+        // in place: the block read its triangles once, in the constructor, and no other block
+        // reads them (a per-block copy left its holes in the threads' heaps: 100 MB resident)
         for (size_t t = 0; t < mTris.size(); ++t)
             if (mTriAlive[t]) {
-                out.triangles.push_back(
-                    {mGlobal[mTris[t][0]], mGlobal[mTris[t][1]], mGlobal[mTris[t][2]]});
-                out.remembered.push_back(mRefused[t]);
+                const uint32_t slot = mSlots[out.alive++];
+                mS.triangles[slot] = {mGlobal[mTris[t][0]], mGlobal[mTris[t][1]],
+                                      mGlobal[mTris[t][2]]};
+                mS.refused[slot] = mRefused[t];
             }
         return out;
     }
@@ -474,6 +475,7 @@ private:
     }
 
     State& mS;
+    const uint32_t* mSlots;        ///< the block's triangles in State
     std::vector<uint32_t> mGlobal; ///< local vertex -> mesh vertex
     std::vector<Tri> mTris;        ///< in local vertices
     std::vector<uint8_t> mTriAlive, mOwn;
