@@ -25,6 +25,11 @@ namespace fluidsurf {
 
 enum class Mesher { MarchingCubes, OpenVdb };
 
+/// The raw mesh's vertex normals: from the field's gradient, or none (mesh.normals empty) for a
+/// mesh that post-processing will change anyway: it computes its own, and the gradients and 12
+/// bytes a vertex are saved.
+enum class RawNormals { Gradient, None };
+
 const char* mesherName(Mesher m);               ///< "mc" or "openvdb"
 Mesher mesherFromName(const std::string& name); ///< ValueError for an unknown name
 
@@ -38,7 +43,7 @@ struct MeshStats
 /// is the level). ValueError when the grid is not a level set-like FloatGrid (no active voxels
 /// is fine: the mesh is empty); Cancelled when ctx's callback stopped it.
 TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, Context& ctx,
-                          MeshStats* stats = nullptr);
+                          MeshStats* stats = nullptr, RawNormals normals = RawNormals::Gradient);
 
 /// The same with a context of its own: CPU, all cores, no callback.
 TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher = Mesher::MarchingCubes,

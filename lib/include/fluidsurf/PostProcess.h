@@ -70,6 +70,9 @@ struct PostProcessParams
 /// Throws ValueError naming the first invalid field.
 void validate(const PostProcessParams& params);
 
+/// Whether params change a mesh at all (any step on); if not, postProcessMesh returns its input.
+bool changesMesh(const PostProcessParams& params);
+
 /// What postProcessMesh did.
 struct PostProcessStats
 {

@@ -193,10 +193,10 @@ struct Passes
     }
 
     // Pass 2: positions and normals of the vertices, in their numbers' order.
-    void placeVertices(TriangleMesh& mesh)
+    void placeVertices(TriangleMesh& mesh, bool normals)
     {
         mesh.points.resize(first.back());
-        mesh.normals.resize(first.back());
+        if (normals) mesh.normals.resize(first.back());
         tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
             ctx.checkpoint();
             FloatAccessor acc(tree);
@@ -215,7 +215,7 @@ struct Passes
                                                uint32_t(e.axis[2][x] >> b & 1) << 2;
                         const Coord l = FloatLeaf::offsetToLocalCoord(openvdb::Index(offset)),
                                     a = values.origin() + l;
-                        const openvdb::Vec3d ga = star.gradient(l);
+                        const openvdb::Vec3d ga = normals ? star.gradient(l) : openvdb::Vec3d(0.0);
                         const float va = buffer[offset];
                         for (int axis = 0; axis < 3; ++axis) {
                             if (!(edges >> axis & 1)) continue;
@@ -228,6 +228,11 @@ struct Passes
                             p[axis] += t;
                             const openvdb::Vec3d w =
                                 affine.linear.transpose() * p + affine.translation;
+                            mesh.points[next] = Vec3f(float(w.x()), float(w.y()), float(w.z()));
+                            if (!normals) {
+                                ++next;
+                                continue;
+                            }
                             const openvdb::Vec3d gb = lb[axis] < int(FloatLeaf::DIM)
                                                           ? star.gradient(lb)
                                                           : indexGradient(acc, b);
@@ -237,7 +242,6 @@ struct Passes
                             if (!(g.lengthSqr() > 0)) g[axis] = va < 0 ? 1.0 : -1.0;
                             g = affine.jacobianInverse.transpose() * g;
                             g.normalize();
-                            mesh.points[next] = Vec3f(float(w.x()), float(w.y()), float(w.z()));
                             mesh.normals[next] = Vec3f(float(g.x()), float(g.y()), float(g.z()));
                             ++next;
                         }
@@ -383,16 +387,21 @@ struct Passes
                         {vertex[polygon[0]], vertex[polygon[k]], vertex[polygon[k + 1]]});
                 return;
             }
+            const bool normals = !mesh.normals.empty();
             openvdb::Vec3d p(0.0), nrm(0.0);
             for (int k = 0; k < n; ++k) {
-                const Vec3f &q = mesh.points[vertex[polygon[k]]],
-                            &m = mesh.normals[vertex[polygon[k]]];
-                p += openvdb::Vec3d(q.x, q.y, q.z) / n, nrm += openvdb::Vec3d(m.x, m.y, m.z);
+                const Vec3f& q = mesh.points[vertex[polygon[k]]];
+                p += openvdb::Vec3d(q.x, q.y, q.z) / n;
+                if (normals) {
+                    const Vec3f& m = mesh.normals[vertex[polygon[k]]];
+                    nrm += openvdb::Vec3d(m.x, m.y, m.z);
+                }
             }
             if (nrm.lengthSqr() > 0) nrm.normalize();
             const uint32_t centre = kLocalVertex | uint32_t(out.points.size());
             out.points.push_back(Vec3f(float(p.x()), float(p.y()), float(p.z())));
-            out.normals.push_back(Vec3f(float(nrm.x()), float(nrm.y()), float(nrm.z())));
+            if (normals)
+                out.normals.push_back(Vec3f(float(nrm.x()), float(nrm.y()), float(nrm.z())));
             for (int k = 0; k < n; ++k)
                 out.triangles.push_back({centre, vertex[polygon[k]], vertex[polygon[(k + 1) % n]]});
         });
@@ -409,10 +418,12 @@ void dropUnusedVertices(TriangleMesh& mesh, Context& ctx)
     uint32_t n = 0;
     for (size_t i = 0; i < map.size(); ++i) {
         if (!map[i]) continue;
-        mesh.points[n] = mesh.points[i], mesh.normals[n] = mesh.normals[i];
+        mesh.points[n] = mesh.points[i];
+        if (!mesh.normals.empty()) mesh.normals[n] = mesh.normals[i];
         map[i] = n++;
     }
-    mesh.points.resize(n), mesh.normals.resize(n);
+    mesh.points.resize(n);
+    if (!mesh.normals.empty()) mesh.normals.resize(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.triangles.size(), 4096),
                       [&](const tbb::blocked_range<size_t>& r) {
                           ctx.checkpoint();
@@ -424,7 +435,8 @@ void dropUnusedVertices(TriangleMesh& mesh, Context& ctx)
 
 } // namespace
 
-TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t* surfaceCells)
+TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t* surfaceCells,
+                           RawNormals normals)
 {
     // Active tiles (rare in level sets) become voxels so that every active value is a leaf voxel.
     openvdb::FloatTree::Ptr voxelized;
@@ -441,7 +453,7 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
     passes.markEdges();
     if (passes.first.back() >= kLocalVertex)
         throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");
-    passes.placeVertices(mesh);
+    passes.placeVertices(mesh, normals == RawNormals::Gradient);
     std::vector<LeafMesh> perLeaf;
     const size_t cells = passes.triangulate(perLeaf, mesh);
     // The leaf bits and edges are done with: free them before the join allocates the mesh's
@@ -460,7 +472,8 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
     // exact sizes: grown by appending, the points and normals kept up to twice their bytes
     // (46 MB of slack on the 1.7M-particle frame, carried through post-processing)
     mesh.triangles.reserve(triangles);
-    mesh.points.reserve(vertices), mesh.normals.reserve(vertices);
+    mesh.points.reserve(vertices);
+    if (normals == RawNormals::Gradient) mesh.normals.reserve(vertices);
     const size_t trimEvery = std::max<size_t>(perLeaf.size() / 8, 1);
     for (size_t leaf = 0; leaf < perLeaf.size(); ++leaf) {
 #ifdef __GLIBC__

@@ -22,7 +22,8 @@ namespace mesh {
 
 /// surfaceCells (optional): the number of cells with a sign change that were triangulated.
 TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx,
-                           size_t* surfaceCells = nullptr);
+                           size_t* surfaceCells = nullptr,
+                           RawNormals normals = RawNormals::Gradient);
 
 } // namespace mesh
 } // namespace fluidsurf

@@ -22,7 +22,7 @@ Mesher mesherFromName(const std::string& name)
 }
 
 TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, Context& ctx,
-                          MeshStats* stats)
+                          MeshStats* stats, RawNormals normals)
 {
     if (!grid.transform().isLinear())
         throw ValueError("grid '" + grid.getName() +
@@ -30,8 +30,10 @@ TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, Context
     const auto timer = ctx.scope("mesh");
     size_t cells = 0;
     TriangleMesh m = util::withThreads(ctx, [&] {
-        return mesher == Mesher::MarchingCubes ? mesh::marchingCubes(grid, ctx, &cells)
-                                               : mesh::openvdbVolumeToMesh(grid, ctx);
+        if (mesher == Mesher::MarchingCubes) return mesh::marchingCubes(grid, ctx, &cells, normals);
+        TriangleMesh vdb = mesh::openvdbVolumeToMesh(grid, ctx);
+        if (normals == RawNormals::None) std::vector<Vec3f>().swap(vdb.normals);
+        return vdb;
     });
     if (stats) {
         stats->surfaceCells = cells;

@@ -122,7 +122,9 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
         res.meshing.vertices = res.mesh.points.size(),
         res.meshing.triangles = res.mesh.triangles.size();
     } else {
-        res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing);
+        // no gradient normals for a mesh that post-processing replaces with its own
+        res.mesh = meshLevelSet(*res.levelSet, params.mesh.mesher, ctx, &res.meshing,
+                                changesMesh(params.post) ? RawNormals::None : RawNormals::Gradient);
     }
     // The finest level's voxel (the adaptive grid's level 3), for post-processing's bounds.
     const double voxel =

@@ -61,6 +61,11 @@ void validate(const PostProcessParams& p)
                          " (a fraction of r in (0, 0.5])");
 }
 
+bool changesMesh(const PostProcessParams& p)
+{
+    return p.decimate > 0 || p.decimateError > 0 || p.smooth > 0 || p.subdivide > 0;
+}
+
 namespace {
 
 // How far each step may move the surface, in voxels: the steps' share of the half voxel that
@@ -92,9 +97,7 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
     PostProcessStats st;
     st.inputTriangles = st.decimatedTriangles = mesh.triangles.size();
     const double voxel = params.voxelSize > 0 ? params.voxelSize : meanEdgeLength(mesh);
-    const bool changes = params.decimate > 0 || params.decimateError > 0 || params.smooth > 0 ||
-                         params.subdivide > 0;
-    if (!changes || mesh.triangles.empty()) {
+    if (!changesMesh(params) || mesh.triangles.empty()) {
         if (stats) *stats = st;
         return mesh;
     }

@@ -338,6 +338,31 @@ TEST(MarchingCubes, SameMeshForAnyThreadCount)
     EXPECT_TRUE(one.triangles == two.triangles);
 }
 
+TEST(MarchingCubes, WithoutNormalsTheSameVerticesAndTriangles)
+{
+    // post-processing computes its own normals: the raw mesh may leave them out, and nothing
+    // else may change (the centre vertices of cells with an ambiguous face included)
+    SceneParams sp;
+    sp.count = 20000;
+    Params coarse = Params::fromRadius(sp.radius);
+    coarse.voxelSize = 2 * sp.radius;
+    const RasterizeResult res = rasterizeParticles(generateScene(Scene::Drop, sp), coarse);
+    for (Mesher mesher : {Mesher::MarchingCubes, Mesher::OpenVdb}) {
+        Context ctx;
+        const TriangleMesh with = meshLevelSet(*res.grid, mesher, ctx, nullptr);
+        const TriangleMesh without =
+            meshLevelSet(*res.grid, mesher, ctx, nullptr, RawNormals::None);
+        SCOPED_TRACE(mesherName(mesher));
+        ASSERT_GT(with.triangles.size(), 1000u);
+        EXPECT_EQ(with.normals.size(), with.points.size());
+        EXPECT_TRUE(without.normals.empty());
+        ASSERT_EQ(with.points.size(), without.points.size());
+        EXPECT_EQ(0, std::memcmp(with.points.data(), without.points.data(),
+                                 with.points.size() * sizeof(Vec3f)));
+        EXPECT_TRUE(with.triangles == without.triangles);
+    }
+}
+
 TEST(MarchingCubes, ReadsLevelSetFiles)
 {
     test::TempDir dir;
