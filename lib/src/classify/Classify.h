@@ -66,7 +66,7 @@ ClassRule classRule(const Params& params);
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
                                  Context& ctx, bool withNormals = false);
 
-/// The classification of the particles keep marks (index order, as neighbors::selectParticles
+/// The classification of the particles keep marks (index order, as neighbors::keepParticles
 /// keeps them), compacted in place; the class counts stay those of the whole frame.
 void selectClasses(Classification& classes, const std::vector<uint8_t>& keep);
 

@@ -179,12 +179,5 @@ void keepParticles(CellIndex& index, const std::vector<uint8_t>& keep)
     index.buildLookup();
 }
 
-CellIndex selectParticles(const CellIndex& in, const std::vector<uint8_t>& keep)
-{
-    CellIndex out = in;
-    keepParticles(out, keep);
-    return out;
-}
-
 } // namespace neighbors
 } // namespace fluidsurf

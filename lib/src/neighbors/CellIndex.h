@@ -89,8 +89,6 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
 /// index restricted to the particles whose keep flag (in cell order) is non-zero, in place (no
 /// second index at any time); order and cells stay sorted, so no re-sort is needed.
 void keepParticles(CellIndex& index, const std::vector<uint8_t>& keep);
-/// The same on a copy.
-CellIndex selectParticles(const CellIndex& index, const std::vector<uint8_t>& keep);
 
 } // namespace neighbors
 } // namespace fluidsurf

@@ -110,11 +110,12 @@ TEST(Classify, NormalsPointOutOfTheBlockAndFollowASelection)
     }
     EXPECT_EQ(faceCentres, 6u * 6 * 6);
 
-    // Every third particle dropped: the classes follow the particles selectParticles keeps.
+    // Every third particle dropped: the classes follow the particles keepParticles keeps.
     std::vector<uint8_t> keep(index.size());
     for (size_t i = 0; i < keep.size(); ++i)
         keep[i] = index.order[i] % 3 != 0;
-    const neighbors::CellIndex selected = neighbors::selectParticles(index, keep);
+    neighbors::CellIndex selected = index;
+    neighbors::keepParticles(selected, keep);
     classify::Classification s = c;
     classify::selectClasses(s, keep);
     std::vector<size_t> at(ps.size(), SIZE_MAX); // input index -> position in index

@@ -56,11 +56,12 @@ TEST(CellIndex, EveryParticleIsInItsCellAndFound)
         ASSERT_TRUE(i >= r.begin && i < r.end) << i;
     }
     EXPECT_TRUE(index.find(-1, 0, 0).empty());
-    // selectParticles keeps order and ranges
+    // keepParticles keeps order and ranges
     std::vector<uint8_t> keep(index.size());
     for (size_t i = 0; i < keep.size(); ++i)
         keep[i] = i % 3 != 0;
-    const CellIndex sub = selectParticles(index, keep);
+    CellIndex sub = index;
+    keepParticles(sub, keep);
     size_t kept = 0;
     for (uint8_t k : keep)
         kept += k;
