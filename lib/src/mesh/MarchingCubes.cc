@@ -16,10 +16,6 @@
 #include <numeric>
 #include <unordered_map>
 
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
-
 namespace fluidsurf {
 namespace mesh {
 
@@ -71,9 +67,8 @@ inline bool probe(const FloatLeaf& leaf, FloatAccessor& acc, int x, int y, int z
     return acc.probeValue(leaf.origin() + Coord(x, y, z), v);
 }
 
-/// One leaf's triangles, and the centre vertices it added (numbered kLocalVertex | i until the
-/// leaves are joined).
-constexpr uint32_t kLocalVertex = 0x80000000u;
+/// Vertex numbers are 32 bits; the meshes here stay under 2^31 vertices.
+constexpr uint64_t kMaxVertices = 0x80000000u;
 
 /// (OpenVDB maps multiply row vectors, p * M; below as M^T * p.)
 struct Affine
@@ -89,10 +84,32 @@ struct Affine
     }
 };
 
-struct LeafMesh
+/// Where a leaf's cells go: counted (pass 3a), then written at the leaf's place in the mesh
+/// (pass 3b). Triangulated into per-leaf pieces and joined after, the pieces and the mesh were
+/// both resident at the stage's peak (46 MB of pieces on the 1.7M-particle frame).
+struct CellCount
 {
-    std::vector<std::array<uint32_t, 3>> triangles;
-    std::vector<Vec3f> points, normals;
+    static constexpr bool kWrites = false;
+    size_t triangles = 0, centres = 0;
+    void triangle(uint32_t, uint32_t, uint32_t) { ++triangles; }
+    uint32_t centre(const Vec3f&, const Vec3f&) { return uint32_t(centres++); }
+};
+struct CellWriter
+{
+    static constexpr bool kWrites = true;
+    TriangleMesh& mesh;
+    size_t nextTriangle;
+    uint32_t nextCentre;
+    void triangle(uint32_t a, uint32_t b, uint32_t c)
+    {
+        mesh.triangles[nextTriangle++] = {a, b, c};
+    }
+    uint32_t centre(const Vec3f& p, const Vec3f& n)
+    {
+        mesh.points[nextCentre] = p;
+        if (!mesh.normals.empty()) mesh.normals[nextCentre] = n;
+        return nextCentre++;
+    }
 };
 
 struct Passes
@@ -102,6 +119,9 @@ struct Passes
     Leaves& leaves;
     Context& ctx;
     std::vector<uint64_t> first; // per leaf: number of its first vertex (after pass 1)
+    /// per leaf (after pass 3a): where its triangles go, and its centre vertices (from the
+    /// first after the edge vertices)
+    std::vector<uint64_t> triangleStart, centreStart;
 
     std::vector<LeafBits> bits;   // per leaf (pass 0)
     std::vector<EdgeWords> edges; // per leaf (pass 1)
@@ -192,11 +212,11 @@ struct Passes
         std::partial_sum(counts.begin(), counts.end(), first.begin() + 1);
     }
 
-    // Pass 2: positions and normals of the vertices, in their numbers' order.
-    void placeVertices(TriangleMesh& mesh, bool normals)
+    // Pass 2: positions and normals of the edge vertices, in their numbers' order (mesh.points,
+    // and mesh.normals if wanted, are sized for the centre vertices too).
+    void placeVertices(TriangleMesh& mesh)
     {
-        mesh.points.resize(first.back());
-        if (normals) mesh.normals.resize(first.back());
+        const bool normals = !mesh.normals.empty();
         tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
             ctx.checkpoint();
             FloatAccessor acc(tree);
@@ -250,88 +270,119 @@ struct Passes
         });
     }
 
-    // Pass 3: triangles of every complete cell with a sign change, per leaf.
-    size_t triangulate(std::vector<LeafMesh>& perLeaf, const TriangleMesh& mesh)
+    // The cells of one leaf (at position pos) that are complete and have a sign change, into
+    // out (CellCount or CellWriter); returns how many.
+    template <typename Sink>
+    size_t cellsOf(const FloatLeaf& leaf, size_t pos, FloatAccessor& acc, const TriangleMesh& mesh,
+                   Sink& out) const
     {
-        perLeaf.assign(leaves.leafCount(), {});
+        size_t cells = 0;
+        const VertexStar idx = Sink::kWrites ? vertexStar(leaf) : VertexStar();
+        const LeafBits &here = bits[pos], &nx = next(leaf, 0), &ny = next(leaf, 1),
+                       &nz = next(leaf, 2);
+        const float* buffer = leaf.buffer().data();
+        const float* plus[3] = {nullptr, nullptr,
+                                nullptr}; // neighbour buffers, read only when active
+        for (int a = 0; a < 3; ++a)
+            if (const FloatLeaf* l = nextValues(leaf, a)) plus[a] = l->buffer().data();
+        float c[8];
+        // Value at local (x, y, z) with at most one coordinate equal to 8.
+        auto value = [&](int x, int y, int z) {
+            if (x == 8) return plus[0][y << 3 | z];
+            if (y == 8) return plus[1][x << 6 | z];
+            if (z == 8) return plus[2][x << 6 | y << 3];
+            return buffer[x << 6 | y << 3 | z];
+        };
+        // Cells that are complete and have a sign change, 64 candidates at a time, from
+        // the two x-planes of their corners (a, b: active; p, q: inside).
+        auto emit = [&](int x, uint64_t a0, uint64_t a1, uint64_t p0, uint64_t p1, uint64_t valid,
+                        int dy, int dz) {
+            const uint64_t complete = squareAll(a0) & squareAll(a1) & valid;
+            const uint64_t mixed =
+                (squareAny(p0) | squareAny(p1)) & ~(squareAll(p0) & squareAll(p1));
+            for (uint64_t todo = complete & mixed; todo; todo &= todo - 1) {
+                const int b = __builtin_ctzll(todo), y = (b >> 3) + dy, z = (b & 7) + dz;
+                for (int n = 0; n < 8; ++n)
+                    c[n] = value(x + kCorner[n][0], y + kCorner[n][1], z + kCorner[n][2]);
+                ++cells;
+                cell(leaf.origin().offsetBy(x, y, z), c, idx, mesh, out);
+            }
+        };
+        for (int x = 0; x < 7; ++x) {
+            emit(x, here.active[x], here.active[x + 1], here.in[x], here.in[x + 1], ~kZ7 & kYBelow7,
+                 0, 0);
+            // y = 7 (z < 7) and z = 7 (y < 7): one row / column of candidates each.
+            emit(x, acrossY(here.active[x], ny.active[x]),
+                 acrossY(here.active[x + 1], ny.active[x + 1]), acrossY(here.in[x], ny.in[x]),
+                 acrossY(here.in[x + 1], ny.in[x + 1]), 0x7F, 7, 0);
+            emit(x, acrossZ(here.active[x], nz.active[x]),
+                 acrossZ(here.active[x + 1], nz.active[x + 1]), acrossZ(here.in[x], nz.in[x]),
+                 acrossZ(here.in[x + 1], nz.in[x + 1]), kZ0 & kYBelow7, 0, 7);
+        }
+        emit(7, here.active[7], nx.active[0], here.in[7], nx.in[0], ~kZ7 & kYBelow7, 0,
+             0); // x = 7
+        // Cells with two or three coordinates 7 (22 per leaf): through the accessor.
+        for (int k = 0; k < 22; ++k) {
+            const Coord l = k < 8    ? Coord(7, 7, k)
+                            : k < 15 ? Coord(7, k - 8, 7)
+                                     : Coord(k - 15, 7, 7);
+            const openvdb::Index offset = FloatLeaf::coordToOffset(l);
+            if (!leaf.isValueOn(offset)) continue;
+            c[0] = buffer[offset];
+            bool complete = true;
+            for (int n = 1; n < 8 && complete; ++n)
+                complete = probe(leaf, acc, l.x(), l.y(), l.z(), kCorner[n][0], kCorner[n][1],
+                                 kCorner[n][2], c[n]);
+            if (!complete) continue;
+            int config = 0;
+            for (int n = 0; n < 8; ++n)
+                config |= int(inside(c[n])) << n;
+            if (config == 0 || config == 255) continue;
+            ++cells;
+            cell(leaf.origin() + l, c, idx, mesh, out);
+        }
+        return cells;
+    }
+
+    // Pass 3a: per leaf, the triangles and centre vertices of its cells, counted, and where
+    // they go; returns the number of cells.
+    size_t countCells()
+    {
+        const size_t n = leaves.leafCount();
+        std::vector<uint64_t> triangles(n, 0), centres(n, 0);
         std::atomic<size_t> surfaceCells{0};
+        const TriangleMesh none;
         tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
             ctx.checkpoint();
             FloatAccessor acc(tree);
             size_t cells = 0;
             for (auto leaf = range.begin(); leaf; ++leaf) {
-                const FloatLeaf& values = *leaf;
-                const VertexStar idx = vertexStar(*leaf);
-                auto& out = perLeaf[leaf.pos()];
-                const LeafBits &here = bits[leaf.pos()], &nx = next(*leaf, 0), &ny = next(*leaf, 1),
-                               &nz = next(*leaf, 2);
-                const float* buffer = values.buffer().data();
-                const float* plus[3] = {nullptr, nullptr,
-                                        nullptr}; // neighbour buffers, read only when active
-                for (int a = 0; a < 3; ++a)
-                    if (const FloatLeaf* l = nextValues(*leaf, a)) plus[a] = l->buffer().data();
-                float c[8];
-                // Value at local (x, y, z) with at most one coordinate equal to 8.
-                auto value = [&](int x, int y, int z) {
-                    if (x == 8) return plus[0][y << 3 | z];
-                    if (y == 8) return plus[1][x << 6 | z];
-                    if (z == 8) return plus[2][x << 6 | y << 3];
-                    return buffer[x << 6 | y << 3 | z];
-                };
-                // Cells that are complete and have a sign change, 64 candidates at a time, from
-                // the two x-planes of their corners (a, b: active; p, q: inside).
-                auto emit = [&](int x, uint64_t a0, uint64_t a1, uint64_t p0, uint64_t p1,
-                                uint64_t valid, int dy, int dz) {
-                    const uint64_t complete = squareAll(a0) & squareAll(a1) & valid;
-                    const uint64_t mixed =
-                        (squareAny(p0) | squareAny(p1)) & ~(squareAll(p0) & squareAll(p1));
-                    for (uint64_t todo = complete & mixed; todo; todo &= todo - 1) {
-                        const int b = __builtin_ctzll(todo), y = (b >> 3) + dy, z = (b & 7) + dz;
-                        for (int n = 0; n < 8; ++n)
-                            c[n] = value(x + kCorner[n][0], y + kCorner[n][1], z + kCorner[n][2]);
-                        ++cells;
-                        cell(values.origin().offsetBy(x, y, z), c, idx, mesh, out);
-                    }
-                };
-                for (int x = 0; x < 7; ++x) {
-                    emit(x, here.active[x], here.active[x + 1], here.in[x], here.in[x + 1],
-                         ~kZ7 & kYBelow7, 0, 0);
-                    // y = 7 (z < 7) and z = 7 (y < 7): one row / column of candidates each.
-                    emit(x, acrossY(here.active[x], ny.active[x]),
-                         acrossY(here.active[x + 1], ny.active[x + 1]),
-                         acrossY(here.in[x], ny.in[x]), acrossY(here.in[x + 1], ny.in[x + 1]), 0x7F,
-                         7, 0);
-                    emit(x, acrossZ(here.active[x], nz.active[x]),
-                         acrossZ(here.active[x + 1], nz.active[x + 1]),
-                         acrossZ(here.in[x], nz.in[x]), acrossZ(here.in[x + 1], nz.in[x + 1]),
-                         kZ0 & kYBelow7, 0, 7);
-                }
-                emit(7, here.active[7], nx.active[0], here.in[7], nx.in[0], ~kZ7 & kYBelow7, 0,
-                     0); // x = 7
-                // Cells with two or three coordinates 7 (22 per leaf): through the accessor.
-                for (int k = 0; k < 22; ++k) {
-                    const Coord l = k < 8    ? Coord(7, 7, k)
-                                    : k < 15 ? Coord(7, k - 8, 7)
-                                             : Coord(k - 15, 7, 7);
-                    const openvdb::Index offset = FloatLeaf::coordToOffset(l);
-                    if (!values.isValueOn(offset)) continue;
-                    c[0] = buffer[offset];
-                    bool complete = true;
-                    for (int n = 1; n < 8 && complete; ++n)
-                        complete = probe(values, acc, l.x(), l.y(), l.z(), kCorner[n][0],
-                                         kCorner[n][1], kCorner[n][2], c[n]);
-                    if (!complete) continue;
-                    int config = 0;
-                    for (int n = 0; n < 8; ++n)
-                        config |= int(inside(c[n])) << n;
-                    if (config == 0 || config == 255) continue;
-                    ++cells;
-                    cell(values.origin() + l, c, idx, mesh, out);
-                }
+                CellCount count;
+                cells += cellsOf(*leaf, leaf.pos(), acc, none, count);
+                triangles[leaf.pos()] = count.triangles, centres[leaf.pos()] = count.centres;
             }
             surfaceCells += cells;
         });
+        triangleStart.assign(n + 1, 0);
+        centreStart.assign(n + 1, 0);
+        std::partial_sum(triangles.begin(), triangles.end(), triangleStart.begin() + 1);
+        std::partial_sum(centres.begin(), centres.end(), centreStart.begin() + 1);
         return surfaceCells;
+    }
+
+    // Pass 3b: the triangles of every complete cell with a sign change, and the centre vertices
+    // of cells with an ambiguous face, each leaf's where pass 3a put them.
+    void triangulate(TriangleMesh& mesh)
+    {
+        tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
+            ctx.checkpoint();
+            FloatAccessor acc(tree);
+            for (auto leaf = range.begin(); leaf; ++leaf) {
+                CellWriter out{mesh, triangleStart[leaf.pos()],
+                               uint32_t(first.back() + centreStart[leaf.pos()])};
+                cellsOf(*leaf, leaf.pos(), acc, mesh, out);
+            }
+        });
     }
 
     /// A leaf and the 7 leaves beyond its +x, +y, +z faces, edges and corner: where a cell's
@@ -366,44 +417,46 @@ struct Passes
     // The polygons of one cell (CellPolygons.h). A polygon is fanned from its first vertex,
     // except in a cell with an ambiguous face, where it gets a centre vertex instead. The
     // cell's crossing edges start in its leaf or in a leaf of idx (both ends are active).
+    template <typename Sink>
     void cell(const Coord& origin, const float c[8], const VertexStar& idx,
-              const TriangleMesh& mesh, LeafMesh& out) const
+              const TriangleMesh& mesh, Sink& out) const
     {
         const CellPolygons polygons(c);
         const int* next = polygons.next;
         const bool ambiguous = polygons.ambiguous;
-        uint32_t vertex[12];
-        for (int e = 0; e < 12; ++e) {
-            if (next[e] < 0) continue;
-            Coord g = origin;
-            for (int a = 0; a < 3; ++a)
-                g[a] += kCorner[kEdges.lowCorner[e]][a];
-            vertex[e] = idx.vertex(g - idx.origin, kEdges.axis[e]);
-        }
+        uint32_t vertex[12] = {};
+        if constexpr (Sink::kWrites)
+            for (int e = 0; e < 12; ++e) {
+                if (next[e] < 0) continue;
+                Coord g = origin;
+                for (int a = 0; a < 3; ++a)
+                    g[a] += kCorner[kEdges.lowCorner[e]][a];
+                vertex[e] = idx.vertex(g - idx.origin, kEdges.axis[e]);
+            }
         polygons.forEach([&](const int* polygon, int n) {
             if (!ambiguous || n == 3) {
                 for (int k = 1; k + 1 < n; ++k)
-                    out.triangles.push_back(
-                        {vertex[polygon[0]], vertex[polygon[k]], vertex[polygon[k + 1]]});
+                    out.triangle(vertex[polygon[0]], vertex[polygon[k]], vertex[polygon[k + 1]]);
                 return;
             }
-            const bool normals = !mesh.normals.empty();
             openvdb::Vec3d p(0.0), nrm(0.0);
-            for (int k = 0; k < n; ++k) {
-                const Vec3f& q = mesh.points[vertex[polygon[k]]];
-                p += openvdb::Vec3d(q.x, q.y, q.z) / n;
-                if (normals) {
-                    const Vec3f& m = mesh.normals[vertex[polygon[k]]];
-                    nrm += openvdb::Vec3d(m.x, m.y, m.z);
+            if constexpr (Sink::kWrites) {
+                const bool normals = !mesh.normals.empty();
+                for (int k = 0; k < n; ++k) {
+                    const Vec3f& q = mesh.points[vertex[polygon[k]]];
+                    p += openvdb::Vec3d(q.x, q.y, q.z) / n;
+                    if (normals) {
+                        const Vec3f& m = mesh.normals[vertex[polygon[k]]];
+                        nrm += openvdb::Vec3d(m.x, m.y, m.z);
+                    }
                 }
+                if (nrm.lengthSqr() > 0) nrm.normalize();
             }
-            if (nrm.lengthSqr() > 0) nrm.normalize();
-            const uint32_t centre = kLocalVertex | uint32_t(out.points.size());
-            out.points.push_back(Vec3f(float(p.x()), float(p.y()), float(p.z())));
-            if (normals)
-                out.normals.push_back(Vec3f(float(nrm.x()), float(nrm.y()), float(nrm.z())));
+            const uint32_t centre =
+                out.centre(Vec3f(float(p.x()), float(p.y()), float(p.z())),
+                           Vec3f(float(nrm.x()), float(nrm.y()), float(nrm.z())));
             for (int k = 0; k < n; ++k)
-                out.triangles.push_back({centre, vertex[polygon[k]], vertex[polygon[(k + 1) % n]]});
+                out.triangle(centre, vertex[polygon[k]], vertex[polygon[(k + 1) % n]]);
         });
     }
 };
@@ -447,52 +500,23 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
         tree = voxelized.get();
     }
     Leaves leaves(*tree);
-    Passes passes{*tree, Affine(grid.transform()), leaves, ctx, {}, {}, {}, {}};
+    Passes passes{*tree, Affine(grid.transform()), leaves, ctx, {}, {}, {}, {}, {}, {}};
     TriangleMesh mesh;
     passes.readBits();
     passes.markEdges();
-    if (passes.first.back() >= kLocalVertex)
+    const size_t cells = passes.countCells();
+    // the centre vertices come after the edge vertices
+    const uint64_t vertices = passes.first.back() + passes.centreStart.back();
+    if (vertices >= kMaxVertices)
         throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");
-    passes.placeVertices(mesh, normals == RawNormals::Gradient);
-    std::vector<LeafMesh> perLeaf;
-    const size_t cells = passes.triangulate(perLeaf, mesh);
-    // The leaf bits and edges are done with: free them before the join allocates the mesh's
-    // triangles.
+    mesh.points.resize(vertices);
+    if (normals == RawNormals::Gradient) mesh.normals.resize(vertices);
+    passes.placeVertices(mesh);
+    mesh.triangles.resize(passes.triangleStart.back());
+    passes.triangulate(mesh);
     // (`= {}` would keep their capacity: it is the initializer-list assignment)
     std::vector<LeafBits>().swap(passes.bits);
     std::vector<EdgeWords>().swap(passes.edges);
-    std::unordered_map<const FloatLeaf*, size_t>().swap(passes.position);
-    // Join the leaves in order: centre vertices after the edge vertices; each leaf's pieces are
-    // freed as they are copied.
-    size_t triangles = 0, vertices = mesh.points.size();
-    for (const LeafMesh& l : perLeaf)
-        triangles += l.triangles.size(), vertices += l.points.size();
-    if (vertices >= kLocalVertex)
-        throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");
-    // exact sizes: grown by appending, the points and normals kept up to twice their bytes
-    // (46 MB of slack on the 1.7M-particle frame, carried through post-processing)
-    mesh.triangles.reserve(triangles);
-    mesh.points.reserve(vertices);
-    if (normals == RawNormals::Gradient) mesh.normals.reserve(vertices);
-    const size_t trimEvery = std::max<size_t>(perLeaf.size() / 8, 1);
-    for (size_t leaf = 0; leaf < perLeaf.size(); ++leaf) {
-#ifdef __GLIBC__
-        // The pieces are small blocks of the threads' heaps, which malloc keeps when they are
-        // freed: handed back every eighth of the way, they do not stay resident beside the
-        // mesh they were copied into (46 MB on the 1.7M-particle frame).
-        if (leaf % trimEvery == trimEvery - 1) malloc_trim(0);
-#endif
-        LeafMesh& l = perLeaf[leaf];
-        const uint32_t base = uint32_t(mesh.points.size());
-        for (auto t : l.triangles) {
-            for (uint32_t& v : t)
-                if (v & kLocalVertex) v = base + (v & ~kLocalVertex);
-            mesh.triangles.push_back(t);
-        }
-        mesh.points.insert(mesh.points.end(), l.points.begin(), l.points.end());
-        mesh.normals.insert(mesh.normals.end(), l.normals.begin(), l.normals.end());
-        l = LeafMesh();
-    }
     dropUnusedVertices(mesh, ctx);
     if (surfaceCells) *surfaceCells = cells;
     return mesh;

@@ -1,16 +1,18 @@
 // MarchingCubes.h - our marching cubes over the active narrow band of a level set (see
 // fluidsurf/MeshLevelSet.h for what it guarantees).
 //
-// Three passes over the VDB leaves, each parallel (TBB) and written per leaf, so the output does
-// not depend on the thread count:
+// Passes over the VDB leaves, each parallel (TBB) and written per leaf, so the output does not
+// depend on the thread count:
 //  1. crossing edges: for every active voxel, which of its +x/+y/+z edges (to an active
 //     neighbour) change sign; counted per leaf, prefix-summed into vertex numbers;
-//  2. one vertex per crossing edge (linear interpolation, normal from the gradient), numbered
+//  2. the cells' triangles and centre vertices (below), counted per leaf and prefix-summed, so
+//     that the mesh's arrays are made once, at their size, and each leaf writes into its part;
+//  3. one vertex per crossing edge (linear interpolation, normal from the gradient), numbered
 //     leaf by leaf and voxel by voxel, so that any cell finds its vertices by counting the
 //     crossing-edge bits before them (a few popcounts; 224 bytes a leaf);
-//  3. triangles: every cell whose 8 corners are active and whose signs differ. Its polygons are
+//  4. triangles: every cell whose 8 corners are active and whose signs differ. Its polygons are
 //     traced from face segments (ambiguous faces by the bilinear saddle value) and fanned (around
-//     a centre vertex in cells with an ambiguous face).
+//     a centre vertex in cells with an ambiguous face; these come after the edge vertices).
 // Vertices no complete cell uses (edges at the band's rim) are dropped at the end. Each pass
 // calls ctx.checkpoint() once per leaf range.
 #pragma once

@@ -26,14 +26,14 @@
 // Each block's collapses, the guards and the memory of refusals: post/DecimateBlock.h.
 //
 // Set-up costs count on two cores: a block numbers its vertices in the order they first appear
-// (a per-thread table, not a sort), the blocks are found by a radix sort, and the quadrics are
+// (a per-thread table, not a sort), the blocks are found by a counting sort, and the quadrics are
 // gathered per vertex in parallel.
 #include "post/Decimate.h"
 
 #include "post/DecimateBlock.h"
 #include "post/Normals.h"
 
-#include "util/RadixSort.h"
+#include "util/Memory.h"
 #include "util/TriangleDistance.h"
 
 #include <tbb/blocked_range.h>
@@ -55,8 +55,10 @@ using namespace detail;
 
 constexpr double kBlockEdges = 32; ///< a block's side in mean edge lengths (~2,500 triangles)
 constexpr size_t kMaxPasses = 64;
-constexpr size_t kLastShare = 5; ///< see "last" in decimate()
-constexpr size_t kSample = 4;    ///< a pass' threshold from every kSample-th triangle's edges
+constexpr size_t kLastShare = 5;  ///< see "last" in decimate()
+constexpr size_t kSample = 4;     ///< a pass' threshold from every kSample-th triangle's edges
+constexpr size_t kTableParts = 4; ///< makeState's vertex -> triangle table, in this many parts
+constexpr uint8_t kGone = 0x80;   ///< State::refused of a triangle a pass collapsed away
 
 /// mesh's triangles move into the state (a copy of 23 MB on the 1.7M-particle frames).
 State makeState(TriangleMesh& mesh)
@@ -94,62 +96,108 @@ State makeState(TriangleMesh& mesh)
     s.refused.assign(s.triangles.size(), 0);
     s.drift.assign(nv, 0.f);
     // each vertex gathers the planes of its triangles, weighted by area, in triangle order: the
-    // same sums every run
-    const VertexTriangles around(s.triangles, nv);
+    // same sums every run. The vertex -> triangle table is made for a part of the vertices at
+    // a time: whole, it was the peak of the run (45 MB on the 1.7M-particle frame).
     // not zeroed: filled below in parallel, where its pages are first touched
     s.quadrics.reset(new PackedQuadric[nv]);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t v = r.begin(); v != r.end(); ++v) {
-            Quadric q{};
-            for (uint32_t i = around.start[v]; i < around.start[v + 1]; ++i) {
-                const Tri& t = s.triangles[around.tris[i]];
-                const Vec3d n = sideCross(s.points, t);
-                const double len = n.length();
-                if (len > 0) q += Quadric::plane(n / len, s.points[t[0]] - s.points[v], len / 2);
-            }
-            s.quadrics[v] = PackedQuadric::pack(q); // relative to the point: see State
-        }
-    });
+    for (size_t part = 0; part < kTableParts; ++part) {
+        const auto first = uint32_t(nv * part / kTableParts),
+                   last = uint32_t(nv * (part + 1) / kTableParts);
+        const VertexTriangles around(s.triangles, first, last);
+        tbb::parallel_for(
+            tbb::blocked_range<uint32_t>(first, last), [&](const tbb::blocked_range<uint32_t>& r) {
+                for (uint32_t v = r.begin(); v != r.end(); ++v) {
+                    Quadric q{};
+                    for (uint32_t i = around.start[v - first]; i < around.start[v - first + 1];
+                         ++i) {
+                        const Tri& t = s.triangles[around.tris[i]];
+                        const Vec3d n = sideCross(s.points, t);
+                        const double len = n.length();
+                        if (len > 0)
+                            q += Quadric::plane(n / len, s.points[t[0]] - s.points[v], len / 2);
+                    }
+                    s.quadrics[v] = PackedQuadric::pack(q); // see State
+                }
+            });
+    }
     return s;
 }
 
 /// The triangles grouped by block (the cube of side `side` its centroid is in, cubes shifted by
-/// `shift` sides), in triangle order within each: tris[start[b], start[b + 1]) are block b's.
+/// `shift` sides), blocks in the order of their cube's key (x, then y, then z), triangles in
+/// mesh order within each: tris[start[b], start[b + 1]) are block b's.
 struct Blocks
 {
     std::vector<uint32_t> tris;
     std::vector<size_t> start;
 };
 
+/// A counting sort on the blocks present, numbered densely in key order: 8 bytes a triangle at
+/// the peak, where a radix sort of (key, triangle) pairs took 20 (65 MB on the 1.7M-particle
+/// frame, the peak of the whole run). Parallel over fixed chunks, each writing its triangles
+/// from where the same block's earlier chunks end: the same result for any thread count.
 Blocks sortIntoBlocks(const State& s, double side, double shift)
 {
     const size_t n = s.triangles.size();
-    std::vector<uint64_t> keys(n);       // (block, triangle)
     constexpr int kBits = 10, kAxes = 3; // 10 bits an axis: 1,024 blocks across is plenty
     constexpr uint32_t kMask = (1u << kBits) - 1;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t t = r.begin(); t != r.end(); ++t) {
+    constexpr size_t kChunk = size_t(1) << 16;
+    const size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<uint32_t> block(n); // each triangle's key, then its block's number
+    std::vector<std::vector<uint32_t>> present(chunks); // the keys in each chunk, sorted, once
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        std::vector<uint32_t>& keys = present[c];
+        for (size_t t = c * kChunk; t < std::min(n, (c + 1) * kChunk); ++t) {
             const Tri& tri = s.triangles[t];
-            const Vec3d c = (s.points[tri[0]] + s.points[tri[1]] + s.points[tri[2]]) / 3.0;
-            uint64_t key = 0;
+            const Vec3d m = (s.points[tri[0]] + s.points[tri[1]] + s.points[tri[2]]) / 3.0;
+            uint32_t key = 0;
             for (int k = 0; k < kAxes; ++k)
                 key = key << kBits |
-                      (uint64_t(int64_t(std::floor(c[k] / side + shift)) + 512) & kMask);
-            keys[t] = key << 32 | t;
+                      (uint32_t(int64_t(std::floor(m[k] / side + shift)) + 512) & kMask);
+            block[t] = key;
+            if (keys.empty() || keys.back() != key) keys.push_back(key); // runs: few a chunk
+        }
+        std::sort(keys.begin(), keys.end());
+        keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    });
+    std::vector<uint32_t> keys;
+    for (auto& p : present) {
+        keys.insert(keys.end(), p.begin(), p.end());
+        std::vector<uint32_t>().swap(p);
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    const size_t nb = keys.size();
+    // counts per (group of chunks, block): few enough groups that the table stays under n / 8
+    // entries however many blocks there are
+    const size_t groups = std::max<size_t>(1, std::min(chunks, n / (8 * std::max<size_t>(nb, 1))));
+    const size_t per = (n + groups - 1) / groups;
+    std::vector<uint32_t> at(groups * nb, 0);
+    tbb::parallel_for(size_t(0), groups, [&](size_t g) {
+        uint32_t* count = &at[g * nb];
+        uint32_t key = UINT32_MAX, number = 0; // the last key's number: runs are common
+        for (size_t t = g * per; t < std::min(n, (g + 1) * per); ++t) {
+            if (block[t] != key)
+                key = block[t],
+                number = uint32_t(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
+            ++count[block[t] = number];
         }
     });
-    // by block, stably: the triangles are already in order, so this is the sort by (block,
-    // triangle)
-    util::radixSortStable(keys, kBits * kAxes, [](uint64_t k) { return k >> 32; });
     Blocks b;
+    b.start.resize(nb + 1);
+    size_t sum = 0;
+    for (size_t k = 0; k < nb; ++k) {
+        b.start[k] = sum;
+        for (size_t g = 0; g < groups; ++g)
+            sum += std::exchange(at[g * nb + k], uint32_t(sum));
+    }
+    b.start[nb] = sum;
     b.tris.resize(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i)
-            b.tris[i] = uint32_t(keys[i]);
+    tbb::parallel_for(size_t(0), groups, [&](size_t g) {
+        uint32_t* to = &at[g * nb];
+        for (size_t t = g * per; t < std::min(n, (g + 1) * per); ++t)
+            b.tris[to[block[t]]++] = uint32_t(t);
     });
-    for (size_t i = 0; i < n; ++i)
-        if (i == 0 || keys[i] >> 32 != keys[i - 1] >> 32) b.start.push_back(i);
-    b.start.push_back(n);
     return b;
 }
 
@@ -265,24 +313,35 @@ void forgetTouched(State& s, std::vector<uint8_t>& touched)
 }
 
 /// The state's mesh: the points its triangles use, in their old order (`kept`, if given: their
-/// indices in the input).
-TriangleMesh compact(const State& s, std::vector<uint32_t>* kept)
+/// indices in the input). The state's other arrays go first: they are the most of its bytes.
+TriangleMesh compact(State&& s, std::vector<uint32_t>* kept)
 {
+    s.quadrics.reset();
+    std::vector<float>().swap(s.drift);
+    std::vector<uint8_t>().swap(s.refused);
+    util::returnFreedMemory();
     TriangleMesh out;
     std::vector<uint32_t> index(s.points.size(), UINT32_MAX);
-    if (kept) kept->clear();
     const size_t nt = s.triangles.size();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t)
             for (uint32_t v : s.triangles[t]) // a mark: any order, any repeat
                 __atomic_store_n(&index[v], 0u, __ATOMIC_RELAXED);
     });
-    for (size_t v = 0; v < s.points.size(); ++v)
-        if (index[v] == 0) {
-            index[v] = uint32_t(out.points.size());
-            out.points.push_back(toVec3f(s.points[v] + s.middle));
-            if (kept) kept->push_back(uint32_t(v));
-        }
+    uint32_t used = 0;
+    for (uint32_t& i : index)
+        if (i == 0) i = used++;
+    out.points.resize(used);
+    if (kept) kept->resize(used);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, index.size()),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t v = r.begin(); v != r.end(); ++v)
+                              if (index[v] != UINT32_MAX) {
+                                  out.points[index[v]] = toVec3f(s.points[v] + s.middle);
+                                  if (kept) (*kept)[index[v]] = uint32_t(v);
+                              }
+                      });
+    std::vector<Vec3d>().swap(s.points);
     out.triangles.resize(nt);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t) {
@@ -306,6 +365,9 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
     std::vector<uint8_t> touched(s.points.size(), 0);      // see BlockResult::touched
     tbb::enumerable_thread_specific<LocalNumbers> localOf; // see Block
     for (size_t pass = 0; pass < kMaxPasses; ++pass) {
+        // (here and below: what the last step freed goes back, so that it does not stay
+        // resident beside the next one's arrays; see util/Memory.h)
+        util::returnFreedMemory();
         const size_t n = s.triangles.size();
         const bool countTarget = target.triangles > 0;
         const size_t needed = !countTarget           ? SIZE_MAX
@@ -317,6 +379,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
         const std::vector<uint32_t>& tris = blocks.tris;
         const std::vector<size_t>& blockStart = blocks.start;
         const size_t nb = blockStart.size() - 1;
+        util::returnFreedMemory();
         valence.assign(s.points.size(), 0);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n),
                           [&](const tbb::blocked_range<size_t>& r) {
@@ -337,6 +400,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
             countTarget ? shareOut(s, blocks, target.maxError, needed, last, rankFactor)
                         : Shares{target.maxError, true, std::vector<size_t>(nb, SIZE_MAX)};
         const std::vector<size_t>& budget = shares.budget;
+        util::returnFreedMemory();
 
         std::vector<BlockResult> results(nb);
         tbb::parallel_for(
@@ -352,30 +416,28 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
                 }
             });
         size_t collapses = 0;
-        std::vector<size_t> offset(nb + 1, 0); // where each block's triangles go, in block order
         for (size_t b = 0; b < nb; ++b) {
             const BlockResult& r = results[b];
             collapses += r.collapses;
             st.refused += r.refused;
             st.maxError = std::max(st.maxError, r.maxError);
             st.maxDrift = std::max(st.maxDrift, r.maxDrift);
-            offset[b + 1] = offset[b] + r.alive;
             for (uint32_t v : r.touched)
                 touched[v] = 1;
         }
-        // the blocks' triangles left, gathered in block order
-        std::vector<Tri> next(offset[nb]);
-        std::vector<uint8_t> nextRefused(offset[nb]);
+        // The triangles left, in mesh order, moved down in place: each block wrote what it
+        // kept over its first slots, and the rest are marked gone here. (Gathered in block
+        // order into a new array, they took 21 MB more at the peak on the 1.7M-particle frame.)
         tbb::parallel_for(size_t(0), nb, [&](size_t b) {
-            for (size_t i = 0; i < results[b].alive; ++i) {
-                next[offset[b] + i] = s.triangles[tris[blockStart[b] + i]];
-                nextRefused[offset[b] + i] = s.refused[tris[blockStart[b] + i]];
-            }
+            for (size_t i = blockStart[b] + results[b].alive; i < blockStart[b + 1]; ++i)
+                s.refused[tris[i]] = kGone;
         });
-        s.triangles.swap(next);
-        s.refused.swap(nextRefused);
-        std::vector<Tri>().swap(next); // (not `next = {}`: that keeps the capacity)
-        std::vector<uint8_t>().swap(nextRefused);
+        size_t left = 0;
+        for (size_t t = 0; t < n; ++t)
+            if (s.refused[t] != kGone)
+                s.triangles[left] = s.triangles[t], s.refused[left++] = s.refused[t];
+        s.triangles.resize(left);
+        s.refused.resize(left);
         forgetTouched(s, touched);
         st.collapses += collapses;
         st.passes = pass + 1;
@@ -391,7 +453,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
         }
     }
 
-    TriangleMesh out = compact(s, kept);
+    TriangleMesh out = compact(std::move(s), kept);
     if (stats) *stats = st; // no normals: see Normals.h
     return out;
 }

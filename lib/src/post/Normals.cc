@@ -10,6 +10,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace fluidsurf {
@@ -22,18 +23,27 @@ VertexTriangles::VertexTriangles(const TriangleMesh& mesh)
 
 VertexTriangles::VertexTriangles(const std::vector<std::array<uint32_t, 3>>& triangles,
                                  size_t points)
+    : VertexTriangles(triangles, 0, uint32_t(points))
 {
-    start.assign(points + 1, 0);
+}
+
+VertexTriangles::VertexTriangles(const std::vector<std::array<uint32_t, 3>>& triangles,
+                                 uint32_t first, uint32_t last)
+{
+    const uint32_t n = last - first;
+    start.assign(size_t(n) + 1, 0);
     for (const auto& t : triangles)
         for (uint32_t v : t)
-            ++start[v + 1];
-    for (size_t v = 0; v + 1 < start.size(); ++v)
+            if (v - first < n) ++start[v - first + 1]; // (unsigned: below first wraps past n)
+    for (size_t v = 0; v < n; ++v)
         start[v + 1] += start[v];
     tris.resize(start.back());
-    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    // filled from each vertex's start, which so moves to the next one's; shifted back after
     for (size_t t = 0; t < triangles.size(); ++t)
         for (uint32_t v : triangles[t])
-            tris[fill[v]++] = uint32_t(t);
+            if (v - first < n) tris[start[v - first]++] = uint32_t(t);
+    std::copy_backward(start.begin(), start.end() - 1, start.end());
+    start[0] = 0;
 }
 
 void computeAngleWeightedNormals(TriangleMesh& mesh)

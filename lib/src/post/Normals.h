@@ -25,6 +25,10 @@ struct VertexTriangles
     explicit VertexTriangles(const TriangleMesh& mesh);
     /// The same for `points` vertices (a mesh whose points live elsewhere).
     VertexTriangles(const std::vector<std::array<uint32_t, 3>>& triangles, size_t points);
+    /// The same for vertices [first, last) only, indexed from first: vertex v's triangles are
+    /// tris[start[v - first], start[v - first + 1]) (a table made in parts, to keep it small).
+    VertexTriangles(const std::vector<std::array<uint32_t, 3>>& triangles, uint32_t first,
+                    uint32_t last);
 };
 
 /// mesh.normals from the triangles around each vertex, each weighted by its angle at the vertex

@@ -108,7 +108,7 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
         const auto t = ctx.scope("volumes");
         before = post::findComponents(mesh);
     }
-    std::vector<uint32_t> component = before.ofPoint;
+    std::vector<uint32_t> component = std::move(before.ofPoint); // (not needed there again)
     const bool decimating = params.decimate > 0 || params.decimateError > 0;
     if (!decimating) post::markClosed(before, mesh, component);
     if (decimating) {
