@@ -84,8 +84,8 @@ struct Affine
     }
 };
 
-/// Where a leaf's cells go: counted (pass 3a), then written at the leaf's place in the mesh
-/// (pass 3b). Triangulated into per-leaf pieces and joined after, the pieces and the mesh were
+/// Where a leaf's cells go: counted (pass 2), then written at the leaf's place in the mesh
+/// (pass 4). Triangulated into per-leaf pieces and joined after, the pieces and the mesh were
 /// both resident at the stage's peak (46 MB of pieces on the 1.7M-particle frame).
 struct CellCount
 {
@@ -119,7 +119,7 @@ struct Passes
     Leaves& leaves;
     Context& ctx;
     std::vector<uint64_t> first; // per leaf: number of its first vertex (after pass 1)
-    /// per leaf (after pass 3a): where its triangles go, and its centre vertices (from the
+    /// per leaf (after pass 2): where its triangles go, and its centre vertices (from the
     /// first after the edge vertices)
     std::vector<uint64_t> triangleStart, centreStart;
 
@@ -212,7 +212,7 @@ struct Passes
         std::partial_sum(counts.begin(), counts.end(), first.begin() + 1);
     }
 
-    // Pass 2: positions and normals of the edge vertices, in their numbers' order (mesh.points,
+    // Pass 3: positions and normals of the edge vertices, in their numbers' order (mesh.points,
     // and mesh.normals if wanted, are sized for the centre vertices too).
     void placeVertices(TriangleMesh& mesh)
     {
@@ -344,7 +344,7 @@ struct Passes
         return cells;
     }
 
-    // Pass 3a: per leaf, the triangles and centre vertices of its cells, counted, and where
+    // Pass 2: per leaf, the triangles and centre vertices of its cells, counted, and where
     // they go; returns the number of cells.
     size_t countCells()
     {
@@ -370,8 +370,8 @@ struct Passes
         return surfaceCells;
     }
 
-    // Pass 3b: the triangles of every complete cell with a sign change, and the centre vertices
-    // of cells with an ambiguous face, each leaf's where pass 3a put them.
+    // Pass 4: the triangles of every complete cell with a sign change, and the centre vertices
+    // of cells with an ambiguous face, each leaf's where pass 2 put them.
     void triangulate(TriangleMesh& mesh)
     {
         tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {

@@ -2,7 +2,7 @@
 // fluidsurf/MeshLevelSet.h for what it guarantees).
 //
 // Passes over the VDB leaves, each parallel (TBB) and written per leaf, so the output does not
-// depend on the thread count:
+// depend on the thread count (pass 0 reads each leaf's active and inside bits):
 //  1. crossing edges: for every active voxel, which of its +x/+y/+z edges (to an active
 //     neighbour) change sign; counted per leaf, prefix-summed into vertex numbers;
 //  2. the cells' triangles and centre vertices (below), counted per leaf and prefix-summed, so
