@@ -37,10 +37,8 @@ Classified classifyOnCpu(const Particles& particles, const Params& params, Conte
 neighbors::CellIndex fieldParticles(Classified&& c, const Params& params)
 {
     if (c.classes.isolated && !params.keepIsolated) {
-        std::vector<uint8_t> keep(c.classes.classes.size());
-        for (size_t i = 0; i < keep.size(); ++i)
-            keep[i] = c.classes.classes[i] != classify::Isolated;
-        neighbors::keepParticles(c.index, keep); // in place: no second index
+        // in place: no second index
+        neighbors::keepParticles(c.index, classify::notIsolated(c.classes));
     }
     neighbors::CellIndex out = std::move(c.index);
     c = Classified(); // the classes, held through the field otherwise

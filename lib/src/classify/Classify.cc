@@ -169,6 +169,14 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     return out;
 }
 
+std::vector<uint8_t> notIsolated(const Classification& c)
+{
+    std::vector<uint8_t> keep(c.classes.size());
+    for (size_t i = 0; i < keep.size(); ++i)
+        keep[i] = c.classes[i] != Isolated;
+    return keep;
+}
+
 void selectClasses(Classification& c, const std::vector<uint8_t>& keep)
 {
     selectInPlace(c.classes, keep);

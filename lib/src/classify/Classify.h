@@ -66,6 +66,9 @@ ClassRule classRule(const Params& params);
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
                                  Context& ctx, bool withNormals = false);
 
+/// The marks (index order) of the particles that are not isolated: those the field takes.
+std::vector<uint8_t> notIsolated(const Classification& classes);
+
 /// The classification of the particles keep marks (index order, as neighbors::keepParticles
 /// keeps them), compacted in place; the class counts stay those of the whole frame.
 void selectClasses(Classification& classes, const std::vector<uint8_t>& keep);

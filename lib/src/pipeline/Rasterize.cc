@@ -119,9 +119,7 @@ struct Run
         // level map pass over too. The classes and kappa follow it, and the full index goes
         // before the band is built.
         if (c.classes.isolated && !params.keepIsolated) {
-            std::vector<uint8_t> keep(c.classes.classes.size());
-            for (size_t i = 0; i < keep.size(); ++i)
-                keep[i] = c.classes.classes[i] != classify::Isolated;
+            const std::vector<uint8_t> keep = classify::notIsolated(c.classes);
             neighbors::keepParticles(c.index, keep);
             classify::selectClasses(c.classes, keep);
             classify::selectInPlace(kappa, keep);
