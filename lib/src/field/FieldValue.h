@@ -10,7 +10,8 @@
 // J is not symmetric. EV_max is the largest eigenvalue of its symmetric part (J + J^T) / 2,
 // which is real, continuous in x, and bounds the real part of every eigenvalue of J from above
 // (numerical range). It comes from the closed-form trigonometric solution of the 3x3 symmetric
-// eigenproblem in double precision; the CUDA backend must use the same.
+// eigenproblem in double precision, its cos(acos(h) / 3) found as a cubic's root without
+// trigonometry (FieldMath.h); the CUDA backend uses the same.
 #pragma once
 
 #include "field/FieldMath.h"
@@ -64,7 +65,15 @@ inline double laneSum(const util::Lanes& v)
     return (v[0] + v[1]) + (v[2] + v[3]); // fixed order: deterministic; float like the lanes
 }
 
-template <typename T> FieldSums toFieldSums(const PartialSums<T>& a)
+inline double laneSum(const util::WideLanes& v)
+{
+    static_assert(util::kWideLanes == 8, "pairwise lane sum written for 8 lanes");
+    return ((v[0] + v[1]) + (v[2] + v[3])) + ((v[4] + v[5]) + (v[6] + v[7]));
+}
+
+/// (always inlined: into the AVX2 sums too, where a call would run it without AVX)
+template <typename T>
+__attribute__((always_inline)) inline FieldSums toFieldSums(const PartialSums<T>& a)
 {
     FieldSums s;
     s.w = laneSum(a.w), s.r = laneSum(a.r);

@@ -7,8 +7,8 @@
 // split by x and y), and then
 // walks its voxel rows along z: a row keeps the particles within R of its (x, y) line, and a voxel
 // reads the slabs within R of its z. The per-voxel sum has a fixed order and fixed lanes, so the
-// output is bitwise identical for any thread count, and the same for the narrow band and for
-// gather-full (both call this on their topology).
+// output is bitwise identical for any thread count (on one machine: see fieldLanes()), and the same
+// for the narrow band and for gather-full (both call this on their topology).
 #pragma once
 
 #include "neighbors/CellIndex.h"
@@ -24,11 +24,18 @@
 namespace fluidsurf {
 namespace field {
 
+/// The lanes the sums run on by default: 8 where the CPU has AVX2 and FMA, else 4 (SSE2). The
+/// lanes' partial sums add up in another order, so phi differs between the two in the last bits
+/// (well within the field tests' 1e-5 r); one machine always takes the same.
+int fieldLanes();
+
 /// Fill every active voxel of tree (voxel (i,j,k) at (i,j,k) * level.voxelSize) with phi (one
 /// ctx.checkpoint() per leaf range), clamped to +-background. Inactive voxels are left alone.
-/// Returns the number of field evaluations.
+/// Returns the number of field evaluations. `lanes`: 4, or 8 where fieldLanes() is 8 (tests
+/// run both); std::invalid_argument otherwise.
 size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
-                     const Params& params, const Level& level, Context& ctx);
+                     const Params& params, const Level& level, Context& ctx,
+                     int lanes = fieldLanes());
 
 } // namespace field
 } // namespace fluidsurf

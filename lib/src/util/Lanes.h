@@ -19,5 +19,10 @@ inline Lanes loadLanes(const float* p)
     return v;
 }
 
+/// Twice as many: one AVX register. Only for code compiled for AVX2 (a target attribute, chosen
+/// at run time): without AVX the compiler splits each operation in two.
+constexpr int kWideLanes = 8;
+typedef float WideLanes __attribute__((vector_size(kWideLanes * sizeof(float))));
+
 } // namespace util
 } // namespace fluidsurf

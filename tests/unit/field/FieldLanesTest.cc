@@ -1,0 +1,146 @@
+// The field's arithmetic paths against independent references: the eigenvalue without
+// trigonometry (FieldMath.h) against acos/cos and Jacobi rotations, and the gather's sums on 4
+// lanes (SSE2) and on 8 (AVX2, where the CPU has it) against the brute-force field
+// (BruteForce.h), so that both paths stay tested whichever this machine takes by default.
+#include "field/FieldMath.h"
+#include "field/GatherField.h"
+#include "unit/field/BruteForce.h"
+
+#include <fluidsurf/Scenes.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace fluidsurf;
+using namespace fluidsurf::test;
+
+TEST(FieldMath, CosThirdOfAcosMatchesTheTrigonometricForm)
+{
+    double worst = 0;
+    auto check = [&](double h) {
+        const double err = std::abs(field::cosThirdOfAcos(h) - std::cos(std::acos(h) / 3));
+        worst = std::max(worst, err);
+        EXPECT_LE(err, 2e-15) << "h = " << h;
+    };
+    for (int i = 0; i <= 200000; ++i)
+        check(-1 + 2 * i / 200000.0);
+    for (int k = 1; k <= 16; ++k) // near both ends, where two roots of the cubic meet (-1)
+        check(-1 + std::pow(10.0, -k)), check(1 - std::pow(10.0, -k));
+    ::testing::Test::RecordProperty("worst_error", std::to_string(worst));
+}
+
+TEST(FieldMath, LargestEigenvalueMatchesJacobiRotations)
+{
+    auto expectMatch = [](const double a[6], const std::string& what) {
+        const std::array<std::array<double, 3>, 3> m{
+            {{a[0], a[1], a[2]}, {a[1], a[3], a[4]}, {a[2], a[4], a[5]}}};
+        const double expected = jacobiLargestEigenvalue(m);
+        double scale = 0;
+        for (int k = 0; k < 6; ++k)
+            scale = std::max(scale, std::abs(a[k]));
+        EXPECT_NEAR(field::largestEigenvalueSym(a), expected, 1e-12 * scale) << what;
+    };
+    // repeated eigenvalues (the closed form's hard cases): a multiple of the identity, the
+    // two largest equal (a flat surface's tangent directions), the two smallest equal
+    const double identity[6] = {2, 0, 0, 2, 0, 2}, topTwo[6] = {1.5, 0, 0, 1.5, 0, 0.25},
+                 bottomTwo[6] = {1.5, 0, 0, 0.25, 0, 0.25};
+    expectMatch(identity, "identity");
+    expectMatch(topTwo, "two largest equal");
+    expectMatch(bottomTwo, "two smallest equal");
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int i = 0; i < 20000; ++i) {
+        double a[6];
+        for (double& v : a)
+            v = u(rng);
+        if (i % 2) // nearly repeated: a rotated diag(l, l + tiny, m)
+            for (int k : {1, 2, 4})
+                a[k] *= 1e-7;
+        expectMatch(a, "random " + std::to_string(i));
+    }
+}
+
+namespace {
+
+/// Every voxel within 2 r of a particle: a band over the whole frame.
+openvdb::FloatTree bandAround(const ParticleSet& ps, double voxel, double radius)
+{
+    openvdb::FloatTree tree(1e9f);
+    const int reach = int(std::ceil(2 * radius / voxel));
+    for (const Vec3f& p : ps.positions) {
+        const openvdb::Coord c(int(std::floor(p.x / voxel)), int(std::floor(p.y / voxel)),
+                               int(std::floor(p.z / voxel)));
+        for (int x = -reach; x <= reach; ++x)
+            for (int y = -reach; y <= reach; ++y)
+                for (int z = -reach; z <= reach; ++z)
+                    tree.setValueOn(c.offsetBy(x, y, z));
+    }
+    return tree;
+}
+
+void expectLanesMatchBruteForce(const ParticleSet& ps, const std::vector<float>& radii,
+                                const Params& p, const std::string& what)
+{
+    Context ctx;
+    const neighbors::CellIndex index =
+        neighbors::buildCellIndex(ps.positions.data(), radii.empty() ? nullptr : radii.data(),
+                                  ps.size(), p.influenceRadius, ctx);
+    std::vector<std::array<double, 3>> pts;
+    for (const Vec3f& v : ps.positions)
+        pts.push_back({v.x, v.y, v.z});
+    const std::vector<double> refRadii(radii.begin(), radii.end());
+    const ReferenceParams ref{p.radius, p.influenceRadius, p.smoothingLength,          p.tLow,
+                              p.tHigh,  p.background(),    p.field == FieldKind::Ssp07};
+    const Level level = p.level();
+    std::vector<int> lanes{4};
+    if (field::fieldLanes() == 8) lanes.push_back(8);
+    for (int l : lanes) {
+        openvdb::FloatTree tree = bandAround(ps, p.voxelSize, p.radius);
+        const size_t evaluations = field::evaluateField(tree, index, p, level, ctx, l);
+        EXPECT_EQ(evaluations, tree.activeVoxelCount()) << what;
+        size_t n = 0, bad = 0;
+        for (auto it = tree.cbeginValueOn(); it; ++it)
+            if (n++ % 7 == 0) { // a seventh of the voxels: the reference is slow
+                const openvdb::Coord c = it.getCoord();
+                const double expected = referencePhi(
+                    pts, refRadii, {c.x() * p.voxelSize, c.y() * p.voxelSize, c.z() * p.voxelSize},
+                    ref);
+                if (std::abs(*it - expected) > 1e-5 * p.radius && bad++ < 5)
+                    ADD_FAILURE() << what << ", " << l << " lanes: voxel " << c << " phi " << *it
+                                  << " reference " << expected;
+            }
+        EXPECT_EQ(bad, 0u) << what << ", " << l << " lanes";
+        EXPECT_GT(n, 10000u) << what;
+    }
+}
+
+} // namespace
+
+TEST(GatherField, FourAndEightLanesMatchBruteForce)
+{
+    SceneParams sp;
+    sp.count = 2000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    Params p = Params::fromRadius(sp.radius);
+    expectLanesMatchBruteForce(ps, {}, p, "ssp07");
+    std::vector<float> radii(ps.size());
+    for (size_t i = 0; i < radii.size(); ++i)
+        radii[i] = float(sp.radius * (0.8 + 0.4 * double(i % 11) / 10));
+    expectLanesMatchBruteForce(ps, radii, p, "ssp07, per-particle radii");
+    p.field = FieldKind::Zb05;
+    expectLanesMatchBruteForce(ps, {}, p, "zb05");
+}
+
+TEST(GatherField, LanesOtherThanFourOrWhatTheCpuHasAreRefused)
+{
+    Context ctx;
+    openvdb::FloatTree tree;
+    const neighbors::CellIndex index;
+    const Params p = Params::fromRadius(0.025);
+    for (int lanes : {0, 16, field::fieldLanes() == 8 ? 2 : 8})
+        EXPECT_THROW(field::evaluateField(tree, index, p, p.level(), ctx, lanes),
+                     std::invalid_argument)
+            << lanes;
+}
