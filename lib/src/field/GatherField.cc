@@ -2,6 +2,7 @@
 #include "field/GatherField.h"
 
 #include "field/FieldValue.h"
+#include "field/FieldValueWide.h"
 #include "util/Lanes.h"
 
 #include <openvdb/tree/LeafManager.h>
@@ -222,7 +223,7 @@ struct Kernel
                 const float vx = float(i * dx), vy = float(j * dx);
                 selectRow(i, j, s);
                 // the row's sums first, then its values: the values' divisions, roots and
-                // eigen-solves of different voxels then overlap in the pipeline
+                // eigen-solves of different voxels then overlap (four to a register with AVX2)
                 FieldSums sum[LeafT::DIM];
                 int at[LeafT::DIM], m = 0;
                 for (int k = 0; k < int(LeafT::DIM); ++k) {
@@ -237,8 +238,14 @@ struct Kernel
                         sum[m++] = radii ? sums<false, true>(s, b, e, vx, vy, vz)
                                          : sums<false, false>(s, b, e, vx, vy, vz);
                 }
+                float value[LeafT::DIM];
+                if (lanes == util::kWideLanes) // (fieldLanes(): the CPU has AVX2)
+                    fieldValuesWide(sum, m, constants, value);
+                else
+                    for (int q = 0; q < m; ++q)
+                        value[q] = fieldValue(sum[q], constants);
                 for (int q = 0; q < m; ++q)
-                    leaf.setValueOnly(at[q], fieldValue(sum[q], constants));
+                    leaf.setValueOnly(at[q], value[q]);
                 evaluations += size_t(m);
             }
         return evaluations;

@@ -1,8 +1,10 @@
 // The field's arithmetic paths against independent references: the eigenvalue without
-// trigonometry (FieldMath.h) against acos/cos and Jacobi rotations, and the gather's sums on 4
+// trigonometry (FieldMath.h) against acos/cos and Jacobi rotations, the gather's sums on 4
 // lanes (SSE2) and on 8 (AVX2, where the CPU has it) against the brute-force field
-// (BruteForce.h), so that both paths stay tested whichever this machine takes by default.
+// (BruteForce.h), so that both paths stay tested whichever this machine takes by default, and
+// the four-at-once values (FieldValueWide.h) bit for bit against fieldValue.
 #include "field/FieldMath.h"
+#include "field/FieldValueWide.h"
 #include "field/GatherField.h"
 #include "unit/field/BruteForce.h"
 
@@ -11,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 using namespace fluidsurf;
@@ -60,6 +63,73 @@ TEST(FieldMath, LargestEigenvalueMatchesJacobiRotations)
                 a[k] *= 1e-7;
         expectMatch(a, "random " + std::to_string(i));
     }
+}
+
+namespace {
+
+/// The sums (FieldMath.h) of n particles at d from the vertex, in double, straight from their
+/// definition (FieldValue.h's comment).
+field::FieldSums sumsOf(const std::vector<std::array<double, 4>>& particles, double R)
+{
+    field::FieldSums s;
+    for (const auto& p : particles) {
+        const double d[3] = {p[0], p[1], p[2]};
+        const double t = 1 - (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / (R * R);
+        if (t <= 0) continue;
+        const double w = t * t * t;
+        s.w += w, s.r += w * p[3];
+        for (int a = 0; a < 3; ++a)
+            s.d[a] += w * d[a], s.g[a] += t * t * d[a];
+        const int pairs[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+        for (int k = 0; k < 6; ++k)
+            s.m[k] += t * t * d[pairs[k][0]] * d[pairs[k][1]];
+    }
+    return s;
+}
+
+} // namespace
+
+TEST(FieldMath, FourAtOnceValuesAreBitIdenticalToFieldValue)
+{
+    if (field::fieldLanes() != 8) GTEST_SKIP() << "this CPU has no AVX2: the path is not taken";
+    const double r = 0.025, R = 4 * r;
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1, 1);
+    // neighbourhoods from empty to full: none, one particle, a line, half a ball (a surface),
+    // a whole ball (inside), a thin sheet
+    std::vector<field::FieldSums> sums;
+    for (int trial = 0; trial < 6000; ++trial) {
+        const int kind = trial % 6, count = kind == 0 ? 0 : kind == 1 ? 1 : 5 + trial % 60;
+        std::vector<std::array<double, 4>> ps;
+        while (int(ps.size()) < count) {
+            std::array<double, 4> p{u(rng) * R, u(rng) * R, u(rng) * R, r * (1 + 0.2 * u(rng))};
+            if (kind == 2) p[1] = p[2] = 0.01 * r * u(rng);
+            if (kind == 3) p[2] = std::abs(p[2]) + 0.3 * r;
+            if (kind == 5) p[2] = 0.05 * r * u(rng);
+            ps.push_back(p);
+        }
+        sums.push_back(sumsOf(ps, R));
+    }
+    size_t compared = 0, differ = 0;
+    for (const bool ssp07 : {true, false})
+        for (const bool radii : {false, true}) {
+            field::FieldConstants c;
+            c.influenceRadius = R, c.radius = r, c.perParticleRadii = radii, c.ssp07 = ssp07;
+            c.background = float(3 * r);
+            // batches of 1 to 8: the tails that are padded
+            for (size_t i = 0, n = 1; i < sums.size(); i += n, n = n % 8 + 1) {
+                const int m = int(std::min(n, sums.size() - i));
+                float wide[8];
+                field::fieldValuesWide(&sums[i], m, c, wide);
+                for (int k = 0; k < m; ++k, ++compared) {
+                    const float one = field::fieldValue(sums[i + k], c);
+                    if (std::memcmp(&one, &wide[k], sizeof one) != 0 && differ++ < 5)
+                        ADD_FAILURE() << "sums " << i + k << " (ssp07 " << ssp07 << ", radii "
+                                      << radii << "): " << wide[k] << " != " << one;
+                }
+            }
+        }
+    EXPECT_EQ(differ, 0u) << "of " << compared;
 }
 
 namespace {
