@@ -1,6 +1,6 @@
 // DecimateBlock.h - one block's greedy edge collapses for the parallel decimation (Decimate.cc,
 // which cuts the mesh into blocks and runs the passes), and the mesh state the blocks share.
-// Only Decimate.cc includes it.
+// Only Decimate.cc includes it (and RankHeapTest, for the heap).
 //
 // Each collapse moves the edge to the point of least quadric error (not to one of its ends, as
 // OpenMesh does): the error is measured against the original triangles' planes, which averages
@@ -25,6 +25,7 @@
 // same order, as with every edge in the heap.
 #pragma once
 
+#include "post/Decimate.h"
 #include "post/Quadric.h"
 #include "post/StepGuard.h"
 
@@ -39,7 +40,6 @@
 #include <functional>
 #include <limits>
 #include <memory>
-#include <queue>
 #include <vector>
 
 namespace fluidsurf {
@@ -145,6 +145,65 @@ private:
     size_t mMask = 0;
 };
 
+/// A binary min-heap of T by T::rank() (distinct entries have distinct ranks, so the pops come
+/// in one order whatever the heap's layout). Why not std::priority_queue: its sift-down chooses
+/// each level's child with a branch that goes either way at random; here the choice is a select
+/// and the pop sifts its hole to a leaf first (Floyd), a third fewer compares. Block's heap was
+/// an eighth of the decimation's time.
+template <typename T> class RankHeap
+{
+public:
+    /// The heap of `items`, in O(n).
+    void assign(std::vector<T>&& items)
+    {
+        mItems = std::move(items);
+        for (size_t i = mItems.size() / 2; i-- > 0;)
+            siftDown(i, mItems[i]);
+    }
+    bool empty() const { return mItems.empty(); }
+    const T& top() const { return mItems.front(); }
+    void push(const T& x)
+    {
+        size_t i = mItems.size();
+        mItems.push_back(x);
+        siftUp(0, i, x);
+    }
+    void pop()
+    {
+        const T x = mItems.back();
+        mItems.pop_back();
+        if (!mItems.empty()) siftDown(0, x);
+    }
+
+private:
+    /// x into the hole at i, which moves to a leaf along the smaller children and then up.
+    void siftDown(size_t i, const T x)
+    {
+        const size_t n = mItems.size(), start = i;
+        while (2 * i + 2 < n) {
+            size_t c = 2 * i + 1;
+            c += mItems[c + 1].rank() < mItems[c].rank();
+            mItems[i] = mItems[c];
+            i = c;
+        }
+        if (2 * i + 1 < n) mItems[i] = mItems[2 * i + 1], i = 2 * i + 1;
+        siftUp(start, i, x);
+    }
+    /// x into the hole at i, moving up while its parent ranks after it (not above `top`).
+    void siftUp(size_t top, size_t i, const T& x)
+    {
+        while (i > top) {
+            const size_t parent = (i - 1) / 2;
+            if (!(x.rank() < mItems[parent].rank())) break;
+            mItems[i] = mItems[parent];
+            i = parent;
+        }
+        mItems[i] = x;
+    }
+
+    std::vector<T> mItems;
+};
+
 /// One block's greedy collapses (see the top of the file). Reads the points and quadrics of
 /// every vertex of its triangles, writes only those of the vertices it owns.
 class Block
@@ -200,7 +259,7 @@ public:
             for (int k = 0; k < 3; ++k) // each inner edge once, from its lower end
                 if (mTris[t][k] < mTris[t][(k + 1) % 3] && !(mRefused[t] >> k & 1))
                     push(mTris[t][k], mTris[t][(k + 1) % 3], &entries);
-        mHeap = std::priority_queue<Entry>(std::less<Entry>(), std::move(entries));
+        mHeap.assign(std::move(entries));
         mPopped = false;
         while (!mHeap.empty() && out.collapses < budget) {
             const Entry e = mHeap.top();
@@ -241,7 +300,14 @@ private:
         uint64_t key;
         uint32_t b;
         uint32_t versions; ///< the ends' versions added up when pushed: they only grow
-        bool operator<(const Entry& o) const { return key != o.key ? key > o.key : b > o.b; }
+        /// The heap's order: the smallest error first, ties to the lowest ends (and, for one
+        /// edge pushed twice with one error, the older versions, which are stale by then).
+        unsigned __int128 rank() const
+        {
+            return (unsigned __int128)key << 64 | uint64_t(b) << 32 | versions;
+        }
+        /// Pops after o, the versions aside.
+        bool after(const Entry& o) const { return key != o.key ? key > o.key : b > o.b; }
     };
 
     enum class Outcome {
@@ -306,7 +372,7 @@ private:
     }
 
     /// e comes after every entry popped so far (the heap's order: the top is the largest).
-    bool popsAfterLast(const Entry& e) const { return !mPopped || e < mLast; }
+    bool popsAfterLast(const Entry& e) const { return !mPopped || e.after(mLast); }
 
     /// Remembers the refusal of edge (a, b) on both its triangles.
     Outcome refuse(uint32_t a, uint32_t b, const uint32_t (&shared)[2])
@@ -483,7 +549,7 @@ private:
     std::vector<uint32_t> mStart, mCount, mRefs; ///< vertex -> its triangles (lists grow at
                                                  ///< the end of mRefs as vertices merge)
     std::vector<uint32_t> mVersion;              ///< bumped when a vertex moves or goes
-    std::priority_queue<Entry> mHeap;
+    RankHeap<Entry> mHeap;
     double mThreshold = 0, mMaxDrift = 0, mMaxStep = 0;
     StepGuard mStep{0};          ///< the fans of the collapse being tried (DecimateTarget::maxStep)
     std::vector<uint32_t> mMark; ///< per vertex: the stamp of the last neighbour walk it was in
