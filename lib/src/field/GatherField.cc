@@ -5,6 +5,8 @@
 #include "field/FieldValueWide.h"
 #include "util/Lanes.h"
 
+#include <fluidsurf/Error.h>
+
 #include <openvdb/tree/LeafManager.h>
 
 #include <tbb/parallel_for.h>
@@ -13,7 +15,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <stdexcept>
 #include <vector>
 
 namespace fluidsurf {
@@ -264,9 +265,9 @@ size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& parti
                      const Params& params, const Level& level, Context& ctx, int lanes)
 {
     if (lanes != util::kLanes && lanes != util::kWideLanes)
-        throw std::invalid_argument("evaluateField: lanes must be 4 or 8");
+        throw ValueError("evaluateField: lanes must be 4 or 8");
     if (lanes == util::kWideLanes && fieldLanes() != lanes)
-        throw std::invalid_argument("evaluateField: 8 lanes need a CPU with AVX2 and FMA");
+        throw ValueError("evaluateField: 8 lanes need a CPU with AVX2 and FMA");
     const bool radii = !particles.radii.empty();
     const int reach = int(std::ceil(params.influenceRadius / level.voxelSize));
     const int slabs = int(LeafT::DIM) + 2 * reach;

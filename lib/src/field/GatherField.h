@@ -32,7 +32,7 @@ int fieldLanes();
 /// Fill every active voxel of tree (voxel (i,j,k) at (i,j,k) * level.voxelSize) with phi (one
 /// ctx.checkpoint() per leaf range), clamped to +-background. Inactive voxels are left alone.
 /// Returns the number of field evaluations. `lanes`: 4, or 8 where fieldLanes() is 8 (tests
-/// run both); std::invalid_argument otherwise.
+/// run both); ValueError otherwise.
 size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
                      const Params& params, const Level& level, Context& ctx,
                      int lanes = fieldLanes());
