@@ -43,36 +43,55 @@ FLUIDSURF_HD inline double maxOf(double a, double b)
     return a >= b ? a : b;
 }
 
+/// The operations beyond + - * / and comparisons that the eigenvalue needs, on doubles (host
+/// and device). FieldValueWide.cc has the same on four doubles a register, so that both run the
+/// one formula below, op for op.
+struct ScalarOps
+{
+    FLUIDSURF_HD static double root(double v) { return sqrt(v); }
+    FLUIDSURF_HD static double clamp(double v, double lo, double hi) { return clampTo(v, lo, hi); }
+    FLUIDSURF_HD static double select(bool m, double a, double b) { return m ? a : b; }
+};
+
+// Always inlined: into FieldValueWide's AVX2 function too, where a call would run without AVX.
+#ifdef __CUDACC__
+#define FLUIDSURF_FIELD_INLINE __forceinline__
+#else
+#define FLUIDSURF_FIELD_INLINE __attribute__((always_inline)) inline
+#endif
+
 /// cos(acos(h) / 3) for h in [-1, 1], the largest root c of 4 c^3 - 3 c = h, without acos and
 /// cos (a sixth of the field stage's time on the host, and 8% of it saved). With u = sqrt((1 + h) /
 /// 2) and d = 2 c - 1 the root solves d sqrt(d + 3) = 2 u, an equation whose slope is at least
 /// sqrt(3) everywhere (in c, two roots meet at h = -1): a quartic in u (within 6e-5) and two Newton
 /// steps give d to 1e-15.
-FLUIDSURF_HD inline double cosThirdOfAcos(double h)
+template <typename Ops = ScalarOps, typename T>
+FLUIDSURF_HD FLUIDSURF_FIELD_INLINE T cosThirdOfAcos(T h)
 {
-    const double u = sqrt((1 + h) * 0.5);
-    double d = (((-0.0175 * u + 0.07666) * u - 0.2127) * u + 1.1535) * u;
+    const T u = Ops::root((1 + h) * 0.5);
+    T d = (((-0.0175 * u + 0.07666) * u - 0.2127) * u + 1.1535) * u;
     for (int step = 0; step < 2; ++step) {
-        const double s = sqrt(d + 3);
+        const T s = Ops::root(d + 3);
         d -= 2 * s * (d * s - 2 * u) / (3 * d + 6);
     }
     return (1 + d) * 0.5;
 }
 
 /// Largest eigenvalue of the symmetric 3x3 matrix (xx, xy, xz, yy, yz, zz).
-FLUIDSURF_HD inline double largestEigenvalueSym(const double a[6])
+template <typename Ops = ScalarOps, typename T>
+FLUIDSURF_HD FLUIDSURF_FIELD_INLINE T largestEigenvalueSym(const T a[6])
 {
-    const double p1 = a[1] * a[1] + a[2] * a[2] + a[4] * a[4];
-    const double q = (a[0] + a[3] + a[5]) / 3;
-    const double b0 = a[0] - q, b3 = a[3] - q, b5 = a[5] - q;
-    const double p2 = b0 * b0 + b3 * b3 + b5 * b5 + 2 * p1;
-    if (!(p2 > 1e-30 * (q * q + 1e-300))) return q; // a multiple of the identity
-    const double p = sqrt(p2 / 6);
-    // det((A - qI) / p) / 2, clamped against rounding before acos.
-    const double det = b0 * (b3 * b5 - a[4] * a[4]) - a[1] * (a[1] * b5 - a[4] * a[2]) +
-                       a[2] * (a[1] * a[4] - b3 * a[2]);
-    const double half = clampTo(det / (2 * p * p * p), -1.0, 1.0);
-    return q + 2 * p * cosThirdOfAcos(half);
+    const T p1 = a[1] * a[1] + a[2] * a[2] + a[4] * a[4];
+    const T q = (a[0] + a[3] + a[5]) / 3;
+    const T b0 = a[0] - q, b3 = a[3] - q, b5 = a[5] - q;
+    const T p2 = b0 * b0 + b3 * b3 + b5 * b5 + 2 * p1;
+    const T p = Ops::root(p2 / 6);
+    // det((A - qI) / p) / 2, clamped against rounding (and 0 / 0 where p is 0, below)
+    const T det = b0 * (b3 * b5 - a[4] * a[4]) - a[1] * (a[1] * b5 - a[4] * a[2]) +
+                  a[2] * (a[1] * a[4] - b3 * a[2]);
+    const T half = Ops::clamp(det / (2 * p * p * p), -1.0, 1.0);
+    // q alone for a multiple of the identity (a select, not a branch: the same on 4 lanes)
+    return Ops::select(p2 > 1e-30 * (q * q + 1e-300), q + 2 * p * cosThirdOfAcos<Ops>(half), q);
 }
 
 /// phi at a vertex from its sums; +background when no particle is within R.
