@@ -148,25 +148,56 @@ struct Kernel
             s.rr.resize(radii ? n + kPad : 0);
     }
 
-    // The particles within R of the row's (x, y) line, by z-slab. For every x-column within R
-    // the y-columns that can hold such particles are one contiguous run; each particle is still
-    // tested, and the picked ones are counting-sorted by z-slab (stable, so deterministic).
-    void selectRow(int i, int j, Scratch& s) const
+    // Which columns a row reads depends only on the row's place in the leaf (leaf-local
+    // coordinates), so it is worked out once for the 64 rows (roots and clamps per row and
+    // x-column were a tenth of the field stage): for every x-column within R of row (i, j)'s
+    // line, the y-columns that can hold particles within R of it are one contiguous run,
+    // columns [first, end) in columnStart's numbering.
+    struct ColumnRun
     {
-        const double vx = i * dx, vy = j * dx;
-        const float fx = float(vx), fy = float(vy), R2 = float(R * R);
-        const int S = slabCount(), B = binCount();
+        uint16_t first, end; // at most 16 x 16 columns (see evaluateField)
+    };
+    struct RowPlan
+    {
+        std::vector<ColumnRun> runs;
+        std::vector<uint32_t> start; // row (i, j)'s runs: [start[8 i + j], start[8 i + j + 1])
+    };
+    RowPlan planRows() const
+    {
+        RowPlan plan;
+        const int B = binCount();
+        for (int i = 0; i < int(LeafT::DIM); ++i)
+            for (int j = 0; j < int(LeafT::DIM); ++j) {
+                plan.start.push_back(uint32_t(plan.runs.size()));
+                const double vx = i * dx, vy = j * dx;
+                for (int xb = binOf(vx - R), xe = binOf(vx + R); xb <= xe; ++xb) {
+                    // Distance from vx to the column's x range [(xb q - reach) dx,
+                    // ((xb + 1) q - reach) dx).
+                    const double gap = std::max({0.0, (xb * binSlabs - reach) * dx - vx,
+                                                 vx - ((xb + 1) * binSlabs - reach) * dx});
+                    if (gap >= R) continue;
+                    const double w = std::sqrt(R * R - gap * gap) + 1e-4 * dx;
+                    plan.runs.push_back(
+                        {uint16_t(xb * B + binOf(vy - w)), uint16_t(xb * B + binOf(vy + w) + 1)});
+                }
+            }
+        plan.start.push_back(uint32_t(plan.runs.size()));
+        return plan;
+    }
+
+    // The particles within R of the row's (x, y) line, by z-slab: each particle of the row's
+    // column runs is tested, and the picked ones are counting-sorted by z-slab (stable, so
+    // deterministic).
+    void selectRow(int i, int j, const RowPlan& plan, Scratch& s) const
+    {
+        const float fx = float(i * dx), fy = float(j * dx), R2 = float(R * R);
+        const int S = slabCount();
         uint32_t n = 0;
         s.rowSlabStart.assign(S + 1, 0);
-        for (int xb = binOf(vx - R), xe = binOf(vx + R); xb <= xe; ++xb) {
-            // Distance from vx to the column's x range [(xb q - reach) dx, ((xb + 1) q - reach)
-            // dx).
-            const double gap = std::max(
-                {0.0, (xb * binSlabs - reach) * dx - vx, vx - ((xb + 1) * binSlabs - reach) * dx});
-            if (gap >= R) continue;
-            const double w = std::sqrt(R * R - gap * gap) + 1e-4 * dx;
-            const uint32_t b = s.columnStart[xb * B + binOf(vy - w)],
-                           e = s.columnStart[xb * B + binOf(vy + w) + 1];
+        const int row = i * int(LeafT::DIM) + j;
+        for (uint32_t r = plan.start[row]; r < plan.start[row + 1]; ++r) {
+            const uint32_t b = s.columnStart[plan.runs[r].first],
+                           e = s.columnStart[plan.runs[r].end];
             // without branches: which particles are left out is unpredictable
             for (uint32_t p = b; p < e; ++p) {
                 const float ex = s.sx[p] - fx, ey = s.sy[p] - fy;
@@ -209,7 +240,7 @@ struct Kernel
         return toFieldSums(acc);
     }
 
-    size_t leaf(LeafT& leaf, Scratch& s) const
+    size_t leaf(LeafT& leaf, const RowPlan& plan, Scratch& s) const
     {
         gather(leaf.origin(), s);
         size_t evaluations = 0;
@@ -222,7 +253,7 @@ struct Kernel
                     any |= mask.isOn(rowOffset + k);
                 if (!any) continue;
                 const float vx = float(i * dx), vy = float(j * dx);
-                selectRow(i, j, s);
+                selectRow(i, j, plan, s);
                 // the row's sums first, then its values: the values' divisions, roots and
                 // eigen-solves of different voxels then overlap (four to a register with AVX2)
                 FieldSums sum[LeafT::DIM];
@@ -279,6 +310,7 @@ size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& parti
                   radii,
                   (slabs + 15) / 16, // at most 16 x 16 columns
                   lanes};
+    const Kernel::RowPlan plan = kernel.planRows();
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
     std::atomic<size_t> evaluations{0};
     tbb::parallel_for(leaves.leafRange(1),
@@ -287,7 +319,7 @@ size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& parti
                           Scratch scratch;
                           size_t n = 0;
                           for (auto leaf = range.begin(); leaf; ++leaf)
-                              n += kernel.leaf(*leaf, scratch);
+                              n += kernel.leaf(*leaf, plan, scratch);
                           evaluations += n;
                       });
     return evaluations;
