@@ -5,8 +5,8 @@
 // where a particle sits at a threshold. So this file is compiled without FMA contraction and
 // repeats the CPU's arithmetic step for step: coordinates relative to the first particle of the
 // cell, the same candidate cells (the box of the cell's particles widened by h, in z, y, x
-// order), the same 4 float lanes (candidate k adds to lane k % 4; candidates out of reach add
-// exact zeros there) and the same reduction and rule (classify/ClassRule.h).
+// order), the same kClassLanes float lanes (candidate k adds to lane k % kClassLanes; candidates
+// out of reach add exact zeros there) and the same reduction and rule (classify/ClassRule.h).
 #include "Stages.cuh"
 
 namespace fluidsurf {
@@ -36,19 +36,39 @@ __global__ void cellBoxKernel(DeviceCells c, double h, int* __restrict__ boxes)
     }
 }
 
-struct Lane4
+/// One sum on kClassLanes lanes in registers: the lane a candidate adds to comes round in turn,
+/// so the sum is rotated after each candidate instead of indexed (an indexed array would live
+/// in local memory).
+struct Lanes
 {
-    float v0 = 0, v1 = 0, v2 = 0, v3 = 0;
-    /// After m candidates with rotate() after each, v0 is lane m % 4; lane l is then:
+    static_assert(classify::kClassLanes == 8, "Lanes holds eight");
+    float v0 = 0, v1 = 0, v2 = 0, v3 = 0, v4 = 0, v5 = 0, v6 = 0, v7 = 0;
+    /// After m candidates with rotate() after each, v0 is lane m % 8; lane l is then:
     __device__ float lane(int l, unsigned m) const
     {
-        const int k = int((unsigned(l) - m) & 3u);
-        return k == 0 ? v0 : k == 1 ? v1 : k == 2 ? v2 : v3;
+        switch (int((unsigned(l) - m) & 7u)) {
+        case 0:
+            return v0;
+        case 1:
+            return v1;
+        case 2:
+            return v2;
+        case 3:
+            return v3;
+        case 4:
+            return v4;
+        case 5:
+            return v5;
+        case 6:
+            return v6;
+        default:
+            return v7;
+        }
     }
     __device__ void rotate()
     {
         const float t = v0;
-        v0 = v1, v1 = v2, v2 = v3, v3 = t;
+        v0 = v1, v1 = v2, v2 = v3, v3 = v4, v4 = v5, v5 = v6, v6 = v7, v7 = t;
     }
 };
 
@@ -66,7 +86,7 @@ __global__ void __launch_bounds__(kThreads)
     int c0[3], c1[3];
     for (int a = 0; a < 3; ++a)
         c0[a] = boxes[6 * cell + a], c1[a] = boxes[6 * cell + 3 + a];
-    Lane4 count, cf, gx, gy, gz;
+    Lanes count, cf, gx, gy, gz;
     unsigned m = 0; // candidates so far
     for (int cz = c0[2]; cz <= c1[2]; ++cz)
         for (int cy = c0[1]; cy <= c1[1]; ++cy)
@@ -95,8 +115,8 @@ __global__ void __launch_bounds__(kThreads)
                     count.rotate(), cf.rotate(), gx.rotate(), gy.rotate(), gz.rotate();
                 }
             }
-    float lanes[5][4];
-    for (int l = 0; l < 4; ++l) {
+    float lanes[5][classify::kClassLanes];
+    for (int l = 0; l < classify::kClassLanes; ++l) {
         lanes[0][l] = count.lane(l, m), lanes[1][l] = cf.lane(l, m);
         lanes[2][l] = gx.lane(l, m), lanes[3][l] = gy.lane(l, m), lanes[4][l] = gz.lane(l, m);
     }

@@ -1,7 +1,7 @@
-// ClassRule.h - the last step of classification at one particle: its 4 lanes of neighbour sums
-// reduced in double, then the class rule (Classify.h). Plain C++ that nvcc also compiles for the
-// device (like field/FieldMath.h), so the CPU and CUDA classes cannot drift apart; any change to
-// the rounding here changes the band's topology.
+// ClassRule.h - the last step of classification at one particle: its kClassLanes lanes of
+// neighbour sums reduced in double, then the class rule (Classify.h). Plain C++ that nvcc also
+// compiles for the device (like field/FieldMath.h), so the CPU and CUDA classes cannot drift apart;
+// any change to the rounding here changes the band's topology.
 #pragma once
 
 #include "util/HostDevice.h"
@@ -13,6 +13,11 @@ namespace fluidsurf {
 namespace classify {
 
 enum ParticleClass : uint8_t { Interior = 0, Surface = 1, Splash = 2, Isolated = 3 };
+
+/// The float lanes a particle's neighbour sums run on, on the CPU and the device alike:
+/// candidate k (in the neighbourhood's order) adds to lane k % kClassLanes. Eight: one AVX
+/// register (two SSE ones where the CPU has no AVX2, with the same sums).
+constexpr int kClassLanes = 8;
 
 struct ClassRule
 {
@@ -29,14 +34,15 @@ struct ParticleSums
     uint8_t cls = Interior;
 };
 
-/// From per-lane sums (count, V t^3, V t^2 d per axis; lane l = candidates k with k % 4 == l,
-/// self included) to the particle's sums and class. L: anything indexable by 0..3.
+/// From per-lane sums (count, V t^3, V t^2 d per axis; lane l = candidates k with
+/// k % kClassLanes == l, self included) to the particle's sums and class. L: anything indexable
+/// by 0 .. kClassLanes - 1.
 template <typename L>
 FLUIDSURF_HD inline ParticleSums classifyLanes(const L& count, const L& cf, const L& gx,
                                                const L& gy, const L& gz, const ClassRule& rule)
 {
     double cnt = 0, sum = 0, g[3] = {0, 0, 0};
-    for (int l = 0; l < 4; ++l)
+    for (int l = 0; l < kClassLanes; ++l)
         cnt += count[l], sum += cf[l], g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
     ParticleSums s;
     // |grad cf| * h: dimensionless, 0 inside, 0.62 on a flat lattice face.

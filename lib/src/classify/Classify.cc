@@ -3,17 +3,18 @@
 
 #include "util/Lanes.h"
 
+#include <fluidsurf/Error.h>
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace fluidsurf {
 namespace classify {
 
 namespace {
-using util::kLanes;
-using util::Lanes;
 
 /// A particle closer than this many h (per axis) to the last one of its cell whose sums were
 /// computed shares them (2^-12 h: 1e-3 r for h = 4r).
@@ -27,14 +28,66 @@ bool sameSpot(const Vec3f& a, const Vec3f& b, float tolerance)
 
 struct Neighbourhood
 {
-    std::vector<float> x, y, z, v; // candidates of one cell, padded to a multiple of kLanes
+    std::vector<float> x, y, z, v; // candidates of one cell, padded to a multiple of kClassLanes
     void clear() { x.clear(), y.clear(), z.clear(), v.clear(); }
     void pad()
     {
-        while (x.size() % kLanes)
+        while (x.size() % kClassLanes)
             x.push_back(3e38f), y.push_back(3e38f), z.push_back(3e38f), v.push_back(0);
     }
 };
+
+/// One particle's neighbour sums, lane by lane (ClassRule.h).
+struct LaneSums
+{
+    float count[kClassLanes], cf[kClassLanes], gx[kClassLanes], gy[kClassLanes], gz[kClassLanes];
+};
+
+/// The sums of the particle at p over the neighbourhood's m candidates, on kClassLanes lanes
+/// held in N vectors V (lanes 0-3 in the first of two SSE registers, 4-7 in the second): the
+/// same operations on every lane whatever V is, and no FMA (neither target has it), so the
+/// sums are the device's (cuda/src/Classify.cu) bit for bit.
+template <typename V, int N>
+__attribute__((always_inline)) inline void laneSums(const Neighbourhood& nb, size_t m, float px,
+                                                    float py, float pz, float h2, LaneSums& out)
+{
+    constexpr int kWidth = kClassLanes / N; // floats in a V
+    V count[N]{}, cf[N]{}, gx[N]{}, gy[N]{}, gz[N]{};
+    for (size_t j = 0; j < m; j += kClassLanes)
+        for (int k = 0; k < N; ++k) {
+            V x, y, z, v;
+            std::memcpy(&x, &nb.x[j + k * kWidth], sizeof x);
+            std::memcpy(&y, &nb.y[j + k * kWidth], sizeof y);
+            std::memcpy(&z, &nb.z[j + k * kWidth], sizeof z);
+            std::memcpy(&v, &nb.v[j + k * kWidth], sizeof v);
+            const V dx = x - px, dy = y - py, dz = z - pz;
+            const V d2 = dx * dx + dy * dy + dz * dz;
+            V t = h2 - d2;
+            t = t > 0.f ? t : 0.f;
+            count[k] += d2 < h2 ? V{} + 1.f : V{};
+            const V vt2 = v * t * t;
+            cf[k] += vt2 * t;
+            gx[k] += vt2 * dx, gy[k] += vt2 * dy, gz[k] += vt2 * dz;
+        }
+    std::memcpy(out.count, count, sizeof count), std::memcpy(out.cf, cf, sizeof cf);
+    std::memcpy(out.gx, gx, sizeof gx), std::memcpy(out.gy, gy, sizeof gy);
+    std::memcpy(out.gz, gz, sizeof gz);
+}
+
+/// laneSums in one AVX register, where the CPU has AVX2 (half the loop of two SSE registers):
+/// compiled for that target alone and picked at run time, so the build runs on any x86-64.
+__attribute__((target("avx2"))) void wideLaneSums(const Neighbourhood& nb, size_t m, float px,
+                                                  float py, float pz, float h2, LaneSums& out)
+{
+    laneSums<util::WideLanes, 1>(nb, m, px, py, pz, h2, out);
+}
+
+void narrowLaneSums(const Neighbourhood& nb, size_t m, float px, float py, float pz, float h2,
+                    LaneSums& out)
+{
+    laneSums<util::Lanes, 2>(nb, m, px, py, pz, h2, out);
+}
+
 } // namespace
 
 KernelConstants kernelConstants(const Params& params)
@@ -59,9 +112,19 @@ ClassRule classRule(const Params& params)
     return r;
 }
 
-Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
-                                 Context& ctx, bool withNormals)
+int classifyRegisterLanes()
 {
+    static const bool wide = __builtin_cpu_supports("avx2");
+    return wide ? util::kWideLanes : util::kLanes;
+}
+
+Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
+                                 Context& ctx, bool withNormals, int registerLanes)
+{
+    if (registerLanes != util::kLanes && registerLanes != util::kWideLanes)
+        throw ValueError("classifyParticles: registerLanes must be 4 or 8");
+    if (registerLanes == util::kWideLanes && classifyRegisterLanes() != registerLanes)
+        throw ValueError("classifyParticles: 8 lanes a register need a CPU with AVX2");
     const size_t n = index.size();
     Classification out;
     out.classes.assign(n, Interior);
@@ -73,6 +136,8 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     const ClassRule rule = classRule(params);
     const double h = k.h, uniformVolume = k.uniformVolume;
     const float h2 = k.h2;
+    static_assert(kClassLanes == util::kWideLanes && kClassLanes == 2 * util::kLanes);
+    const auto sumsOf = registerLanes == util::kWideLanes ? wideLaneSums : narrowLaneSums;
 
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, index.cellCount(), 16),
@@ -125,20 +190,10 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
                     computed = i;
                     const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y),
                                 pz = float(double(p.z) - o.z);
-                    Lanes count{}, cf{}, gx{}, gy{}, gz{};
-                    for (size_t j = 0; j < m; j += kLanes) {
-                        const Lanes dx = util::loadLanes(&nb.x[j]) - px,
-                                    dy = util::loadLanes(&nb.y[j]) - py,
-                                    dz = util::loadLanes(&nb.z[j]) - pz;
-                        const Lanes d2 = dx * dx + dy * dy + dz * dz;
-                        Lanes t = h2 - d2;
-                        t = t > 0.f ? t : 0.f;
-                        count += d2 < h2 ? Lanes{} + 1.f : Lanes{};
-                        const Lanes vt2 = util::loadLanes(&nb.v[j]) * t * t;
-                        cf += vt2 * t;
-                        gx += vt2 * dx, gy += vt2 * dy, gz += vt2 * dz;
-                    }
-                    const ParticleSums ps = classifyLanes(count, cf, gx, gy, gz, rule);
+                    LaneSums sums;
+                    sumsOf(nb, m, px, py, pz, h2, sums);
+                    const ParticleSums ps =
+                        classifyLanes(sums.count, sums.cf, sums.gx, sums.gy, sums.gz, rule);
                     out.neighbours[i] = ps.neighbours;
                     out.colorField[i] = ps.colorField;
                     out.colorGradient[i] = ps.gradient;
@@ -146,8 +201,8 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
                     if (withNormals && isSurface(ps.cls)) {
                         // The gradient's sum points into the fluid (d = x_j - x_i).
                         double g[3] = {0, 0, 0};
-                        for (int l = 0; l < kLanes; ++l)
-                            g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
+                        for (int l = 0; l < kClassLanes; ++l)
+                            g[0] += sums.gx[l], g[1] += sums.gy[l], g[2] += sums.gz[l];
                         const double len = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
                         if (len > 0)
                             out.normals[i] =

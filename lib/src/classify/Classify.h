@@ -60,11 +60,19 @@ KernelConstants kernelConstants(const Params& params);
 /// The class rule's constants and thresholds from the parameters.
 ClassRule classRule(const Params& params);
 
+/// The floats per register that classification's kClassLanes lanes run in by default: 8 (one
+/// AVX register) where the CPU has AVX2, else 4 (two SSE registers). The sums are the same bits
+/// either way, and the device's.
+int classifyRegisterLanes();
+
 /// Parallel over occupied cells (ctx.checkpoint() per range); each cell gathers its
 /// neighbourhood once.
 /// uniformRadius is used when the index has no per-particle radii. withNormals fills normals.
+/// `registerLanes`: 4, or 8 where classifyRegisterLanes() is 8 (tests run both); ValueError
+/// otherwise.
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
-                                 Context& ctx, bool withNormals = false);
+                                 Context& ctx, bool withNormals = false,
+                                 int registerLanes = classifyRegisterLanes());
 
 /// The marks (index order) of the particles that are not isolated: those the field takes.
 std::vector<uint8_t> notIsolated(const Classification& classes);

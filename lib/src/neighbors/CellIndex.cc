@@ -15,28 +15,12 @@ namespace fluidsurf {
 namespace neighbors {
 
 namespace {
-uint64_t spreadBits(uint32_t v) // 21 bits -> every third bit of 63
-{
-    uint64_t x = v & 0x1fffff;
-    x = (x | x << 32) & 0x1f00000000ffffull;
-    x = (x | x << 16) & 0x1f0000ff0000ffull;
-    x = (x | x << 8) & 0x100f00f00f00f00full;
-    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
-}
-
 struct Handle // the thesis' "handler": cell key and particle id
 {
     uint64_t key;
     uint32_t index;
 };
 } // namespace
-
-uint64_t mortonKey(uint32_t cx, uint32_t cy, uint32_t cz)
-{
-    return spreadBits(cx) | spreadBits(cy) << 1 | spreadBits(cz) << 2;
-}
 
 int64_t CellIndex::cellCoord(double v, int axis) const
 {
@@ -46,13 +30,6 @@ int64_t CellIndex::cellCoord(double v, int axis) const
     return int64_t(c);
 }
 
-namespace {
-inline size_t slotOf(uint64_t key, size_t mask)
-{
-    return size_t((key * 0x9e3779b97f4a7c15ull) >> 17) & mask;
-}
-} // namespace
-
 void CellIndex::buildLookup()
 {
     size_t size = 16;
@@ -61,24 +38,11 @@ void CellIndex::buildLookup()
     tableKeys.assign(size, kEmptyKey);
     tableCells.assign(size, 0);
     for (size_t c = 0; c < keys.size(); ++c) {
-        size_t slot = slotOf(keys[c], size - 1);
+        size_t slot = slotOfKey(keys[c], size - 1);
         while (tableKeys[slot] != kEmptyKey)
             slot = (slot + 1) & (size - 1);
         tableKeys[slot] = keys[c];
         tableCells[slot] = uint32_t(c);
-    }
-}
-
-CellRange CellIndex::find(int64_t cx, int64_t cy, int64_t cz) const
-{
-    if (cx < 0 || cy < 0 || cz < 0 || cx >= dims[0] || cy >= dims[1] || cz >= dims[2] ||
-        tableKeys.empty())
-        return {};
-    const uint64_t key = mortonKey(uint32_t(cx), uint32_t(cy), uint32_t(cz));
-    const size_t mask = tableKeys.size() - 1;
-    for (size_t slot = slotOf(key, mask);; slot = (slot + 1) & mask) {
-        if (tableKeys[slot] == key) return {starts[tableCells[slot]], starts[tableCells[slot] + 1]};
-        if (tableKeys[slot] == kEmptyKey) return {};
     }
 }
 

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 using namespace fluidsurf;
 using namespace fluidsurf::test;
@@ -177,4 +178,59 @@ TEST(Classify, NearCoincidentPileSharesExactSums)
         if (inPile) EXPECT_GE(c.neighbours[i], 2000u);
     }
     EXPECT_EQ(pile, 2001u);
+}
+
+TEST(Classify, ColorFieldAndGradientMatchBruteForceInEitherRegisterWidth)
+{
+    // cf_i = poly6 sum V (h^2 - d^2)^3 and |grad cf_i| h = 6 poly6 h |sum V (h^2 - d^2)^2 d|,
+    // summed here in double over every pair; the 8 float lanes must agree within float
+    // rounding, and the two register widths (two SSE registers, one AVX one) bit for bit: they
+    // stand for the device's sums too (cuda/src/Classify.cu runs the same lanes).
+    SceneParams sp;
+    sp.count = 2500;
+    sp.droplets = 3;
+    ParticleSet ps = generateScene(Scene::Drop, sp);
+    jitter(ps, 5, 0.3 * sp.radius);
+    const Params p = Params::fromRadius(sp.radius);
+    Context ctx;
+    const neighbors::CellIndex index =
+        neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength, ctx);
+    const double h = p.smoothingLength, poly6 = 315.0 / (64.0 * M_PI * std::pow(h, 9)),
+                 volume = std::pow(2 * sp.radius, 3);
+    const classify::Classification four = classify::classifyParticles(index, p, ctx, true, 4);
+    size_t checked = 0;
+    for (size_t i = 0; i < index.size(); ++i) {
+        double cf = 0, g[3] = {0, 0, 0};
+        for (size_t j = 0; j < index.size(); ++j) {
+            double d[3], d2 = 0;
+            for (int a = 0; a < 3; ++a)
+                d[a] = double(index.positions[j][a]) - double(index.positions[i][a]),
+                d2 += d[a] * d[a];
+            if (d2 >= h * h) continue;
+            const double t = h * h - d2;
+            cf += volume * t * t * t;
+            for (int a = 0; a < 3; ++a)
+                g[a] += volume * t * t * d[a];
+        }
+        cf *= poly6;
+        const double grad = 6 * poly6 * h * std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        ASSERT_NEAR(four.colorField[i], cf, 2e-5 * std::max(cf, 1.0)) << i;
+        ASSERT_NEAR(four.colorGradient[i], grad, 2e-5) << i;
+        ++checked;
+    }
+    EXPECT_EQ(checked, ps.size());
+    if (classify::classifyRegisterLanes() != 8) {
+        EXPECT_THROW(classify::classifyParticles(index, p, ctx, false, 8), ValueError);
+        GTEST_SKIP() << "no AVX2 here: only the SSE registers were checked";
+    }
+    const classify::Classification eight = classify::classifyParticles(index, p, ctx, true, 8);
+    for (size_t i = 0; i < index.size(); ++i) {
+        ASSERT_EQ(four.neighbours[i], eight.neighbours[i]) << i;
+        ASSERT_EQ(four.classes[i], eight.classes[i]) << i;
+        ASSERT_EQ(std::memcmp(&four.colorField[i], &eight.colorField[i], sizeof(float)), 0) << i;
+        ASSERT_EQ(std::memcmp(&four.colorGradient[i], &eight.colorGradient[i], sizeof(float)), 0)
+            << i;
+        ASSERT_EQ(std::memcmp(&four.normals[i], &eight.normals[i], sizeof(Vec3f)), 0) << i;
+    }
+    EXPECT_THROW(classify::classifyParticles(index, p, ctx, false, 6), ValueError);
 }
