@@ -1,11 +1,13 @@
 // CellIndex.cc - Morton keys, parallel radix sort, cell ranges.
 #include "neighbors/CellIndex.h"
 
+#include "util/Memory.h"
 #include "util/RadixSort.h"
 
 #include <fluidsurf/Error.h>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -35,15 +37,31 @@ void CellIndex::buildLookup()
     size_t size = 16;
     while (size < 2 * keys.size())
         size *= 2; // load factor <= 1/2
-    tableKeys.assign(size, kEmptyKey);
-    tableCells.assign(size, 0);
-    for (size_t c = 0; c < keys.size(); ++c) {
-        size_t slot = slotOfKey(keys[c], size - 1);
-        while (tableKeys[slot] != kEmptyKey)
-            slot = (slot + 1) & (size - 1);
-        tableKeys[slot] = keys[c];
-        tableCells[slot] = uint32_t(c);
-    }
+    const size_t mask = size - 1;
+    tableKeys.resize(size);
+    tableCells.resize(size);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, size, 1 << 16),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          std::fill(tableKeys.begin() + ptrdiff_t(r.begin()),
+                                    tableKeys.begin() + ptrdiff_t(r.end()), kEmptyKey);
+                      });
+    // In parallel, each key claiming the first empty slot on from its own with a compare and
+    // swap (as the device does): which slot a key gets then depends on the timing where keys
+    // collide, but every key sits after no empty slot on its way, so find() finds the same
+    // cell either way. (Serially, the inserts were an eighth of the index's time on 13.1M.)
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, keys.size(), 1 << 14),
+        [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t c = r.begin(); c != r.end(); ++c)
+                for (size_t slot = slotOfKey(keys[c], mask);; slot = (slot + 1) & mask) {
+                    uint64_t empty = kEmptyKey;
+                    if (__atomic_compare_exchange_n(&tableKeys[slot], &empty, keys[c], false,
+                                                    __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+                        tableCells[slot] = uint32_t(c);
+                        break;
+                    }
+                }
+        });
 }
 
 void cellGrid(const BBox3f& box, double cellSize, double origin[3], uint32_t dims[3])
@@ -72,11 +90,21 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
         index.starts.push_back(0);
         return index;
     }
-    BBox3f box;
-    for (size_t i = 0; i < n; ++i)
-        box.expand(positions[i]);
+    // (min and max: exact in any order)
+    const BBox3f box = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 1 << 16), BBox3f(),
+        [&](const tbb::blocked_range<size_t>& r, BBox3f b) {
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                b.expand(positions[i]);
+            return b;
+        },
+        [](BBox3f a, const BBox3f& b) {
+            for (int k = 0; k < 3; ++k)
+                a.min[k] = std::min(a.min[k], b.min[k]), a.max[k] = std::max(a.max[k], b.max[k]);
+            return a;
+        });
     cellGrid(box, cellSize, index.origin, index.dims);
-    std::vector<Handle> handles(n);
+    std::vector<Handle, util::NoInitAllocator<Handle>> handles(n); // filled in parallel below
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
             ctx.checkpoint();
@@ -110,12 +138,26 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
                               if (radii) index.radii[i] = radii[src];
                           }
                       });
-    for (size_t i = 0; i < n; ++i)
-        if (i == 0 || handles[i].key != handles[i - 1].key) {
-            index.keys.push_back(handles[i].key);
-            index.starts.push_back(uint32_t(i));
-        }
-    index.starts.push_back(uint32_t(n));
+    // the occupied cells: where the key changes, counted per chunk, then written from where
+    // the earlier chunks' cells end
+    constexpr size_t kChunk = size_t(1) << 16;
+    const size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<size_t> firstCell(chunks + 1, 0);
+    auto isFirst = [&](size_t i) { return i == 0 || handles[i].key != handles[i - 1].key; };
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
+            firstCell[c + 1] += isFirst(i);
+    });
+    for (size_t c = 0; c < chunks; ++c)
+        firstCell[c + 1] += firstCell[c];
+    index.keys.resize(firstCell[chunks]);
+    index.starts.resize(firstCell[chunks] + 1);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        size_t cell = firstCell[c];
+        for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
+            if (isFirst(i)) index.keys[cell] = handles[i].key, index.starts[cell++] = uint32_t(i);
+    });
+    index.starts.back() = uint32_t(n);
     index.buildLookup();
     return index;
 }

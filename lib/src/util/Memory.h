@@ -11,6 +11,10 @@
 #include <malloc.h>
 #endif
 
+#include <memory>
+#include <new>
+#include <utility>
+
 namespace fluidsurf {
 namespace util {
 
@@ -21,6 +25,24 @@ inline void returnFreedMemory()
     malloc_trim(0);
 #endif
 }
+
+/// An allocator whose vectors leave new elements of a trivial type uninitialised (resize(n),
+/// vector(n)): an array of hundreds of MB is then first touched by the parallel loop that fills
+/// it, instead of zeroed by one thread first (0.07 s for the 13.1M particles' sort handles).
+template <typename T> struct NoInitAllocator : std::allocator<T>
+{
+    template <typename U> struct rebind
+    {
+        using other = NoInitAllocator<U>;
+    };
+    NoInitAllocator() = default;
+    template <typename U> NoInitAllocator(const NoInitAllocator<U>&) noexcept {}
+    template <typename U> void construct(U* p) noexcept { ::new (static_cast<void*>(p)) U; }
+    template <typename U, typename... Args> void construct(U* p, Args&&... args)
+    {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+};
 
 } // namespace util
 } // namespace fluidsurf

@@ -17,8 +17,9 @@ namespace util {
 
 /// Sorts items by key(item) (an unsigned integer below 2^keyBits), stably. Rounds of at most 11
 /// bits; a round where every item has the same digit is skipped.
-template <typename T, typename KeyOf>
-void radixSortStable(std::vector<T>& items, int keyBits, KeyOf key)
+/// The scratch array has items' allocator (util::NoInitAllocator: not zeroed first).
+template <typename T, typename Alloc, typename KeyOf>
+void radixSortStable(std::vector<T, Alloc>& items, int keyBits, KeyOf key)
 {
     const size_t n = items.size();
     if (n < 2 || keyBits <= 0) return;
@@ -26,7 +27,7 @@ void radixSortStable(std::vector<T>& items, int keyBits, KeyOf key)
     const int rounds = (keyBits + 10) / 11, digitBits = (keyBits + rounds - 1) / rounds;
     const size_t digits = size_t(1) << digitBits, chunks = (n + kChunk - 1) / kChunk;
     const uint64_t mask = digits - 1;
-    std::vector<T> other(n);
+    std::vector<T, Alloc> other(n);
     std::vector<size_t> at(chunks * digits);
     for (int round = 0; round < rounds; ++round) {
         const int shift = digitBits * round;

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <set>
 
@@ -80,4 +81,52 @@ TEST(CellIndex, RejectsSpansBeyondTheKey)
     std::vector<Vec3f> pts{{0, 0, 0}, {0, 3e6f, 0}};
     Context ctx;
     EXPECT_THROW(buildCellIndex(pts.data(), nullptr, pts.size(), 1.0, ctx), ValueError);
+}
+
+TEST(CellIndex, ManyCellsAcrossChunksAreAllFoundAndNoOthers)
+{
+    // 300,000 particles over ~150,000 cells: the cells are found in chunks of 65,536 particles
+    // and the hash table is filled by many tasks at once. Every particle's cell range must hold
+    // it and only particles of that cell, and a cell without particles must not be found.
+    std::vector<Vec3f> pts;
+    uint64_t s = 7;
+    auto u = [&] {
+        s = s * 6364136223846793005ull + 1442695040888963407ull;
+        return float(s >> 40) / float(1 << 24);
+    };
+    for (int i = 0; i < 300000; ++i)
+        pts.emplace_back(u() * 8, u() * 8, u() * 4);
+    const double cell = 0.1; // 80 x 80 x 40 = 256,000 cells, most of them occupied
+    Context ctx;
+    const CellIndex index = buildCellIndex(pts.data(), nullptr, pts.size(), cell, ctx);
+    std::set<std::array<int64_t, 3>> occupied;
+    auto cellOf = [&](const Vec3f& p) {
+        std::array<int64_t, 3> cc;
+        for (int a = 0; a < 3; ++a)
+            cc[a] = index.cellCoord(p[a], a);
+        return cc;
+    };
+    for (const Vec3f& p : pts)
+        occupied.insert(cellOf(p));
+    ASSERT_EQ(index.cellCount(), occupied.size());
+    ASSERT_EQ(index.starts.size(), index.cellCount() + 1);
+    ASSERT_EQ(index.starts.back(), pts.size());
+    for (size_t c = 0; c < index.cellCount(); ++c)
+        ASSERT_LT(index.starts[c], index.starts[c + 1]) << c;
+    for (size_t i = 0; i < index.size(); ++i) {
+        const std::array<int64_t, 3> cc = cellOf(index.positions[i]);
+        const CellRange r = index.find(cc[0], cc[1], cc[2]);
+        ASSERT_TRUE(i >= r.begin && i < r.end) << i;
+        for (uint32_t j = r.begin; j < r.end; ++j)
+            ASSERT_EQ(cellOf(index.positions[j]), cc) << i << " " << j;
+    }
+    size_t empty = 0;
+    for (int64_t z = 0; z < index.dims[2]; ++z)
+        for (int64_t y = 0; y < index.dims[1]; ++y)
+            for (int64_t x = 0; x < index.dims[0]; ++x)
+                if (!occupied.count({x, y, z})) {
+                    ASSERT_TRUE(index.find(x, y, z).empty()) << x << " " << y << " " << z;
+                    ++empty;
+                }
+    EXPECT_GT(empty, 10000u); // the lookup was asked about cells it must not find
 }
