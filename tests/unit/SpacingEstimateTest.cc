@@ -10,6 +10,20 @@
 
 using namespace fluidsurf;
 
+namespace {
+/// The distance from particle q to its nearest other particle, by brute force in double.
+double bruteForceNearest(const ParticleSet& ps, size_t q)
+{
+    double best = INFINITY;
+    for (size_t j = 0; j < ps.size(); ++j) {
+        if (j == q) continue;
+        const Vec3f d = ps.positions[j] - ps.positions[q];
+        best = std::min(best, std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z));
+    }
+    return best;
+}
+} // namespace
+
 TEST(SpacingEstimate, LatticeSpacingIsTwiceTheRadius)
 {
     SceneParams p;
@@ -32,16 +46,8 @@ TEST(SpacingEstimate, MatchesBruteForceOnRandomPoints)
     for (int i = 0; i < 3000; ++i)
         ps.positions.emplace_back(u(rng), u(rng) * 0.3f, u(rng) * 5.f);
     std::vector<double> nn;
-    for (size_t i = 0; i < ps.size(); ++i) {
-        double best = INFINITY;
-        for (size_t j = 0; j < ps.size(); ++j) {
-            if (i == j) continue;
-            const Vec3f d = ps.positions[j] - ps.positions[i];
-            best = std::min(best,
-                            std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z));
-        }
-        nn.push_back(best);
-    }
+    for (size_t i = 0; i < ps.size(); ++i)
+        nn.push_back(bruteForceNearest(ps, i));
     std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
     const SpacingEstimate e = estimateSpacing(ps);
     EXPECT_NEAR(e.medianNearest, nn[nn.size() / 2], 1e-6);
@@ -66,14 +72,7 @@ TEST(SpacingEstimate, EverySampledParticleIsMeasuredOnce)
     for (size_t s = 0; s < samples; ++s) {
         const size_t q = sampled(s);
         if (s % 7 == 0 && s >= 7 && s <= 70) continue; // the lone ones
-        double best = INFINITY;
-        for (size_t j = 0; j < n; ++j) {
-            if (j == q) continue;
-            const Vec3f d = ps.positions[j] - ps.positions[q];
-            best = std::min(best,
-                            std::sqrt(double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z));
-        }
-        nn.push_back(best);
+        nn.push_back(bruteForceNearest(ps, q));
     }
     std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
     const SpacingEstimate e = estimateSpacing(ps, samples);

@@ -15,12 +15,13 @@ using namespace fluidsurf::test;
 
 namespace {
 classify::Classification classifyScene(const ParticleSet& ps, const Params& p,
-                                       neighbors::CellIndex& index)
+                                       neighbors::CellIndex& index, bool withNormals = false,
+                                       int registerLanes = classify::classifyRegisterLanes())
 {
     Context ctx;
     index =
         neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength, ctx);
-    return classify::classifyParticles(index, p, ctx);
+    return classify::classifyParticles(index, p, ctx, withNormals, registerLanes);
 }
 
 /// Uniform in [-0.5, 0.5) from a 64-bit LCG (the same numbers on every platform).
@@ -192,12 +193,10 @@ TEST(Classify, ColorFieldAndGradientMatchBruteForceInEitherRegisterWidth)
     ParticleSet ps = generateScene(Scene::Drop, sp);
     jitter(ps, 5, 0.3 * sp.radius);
     const Params p = Params::fromRadius(sp.radius);
-    Context ctx;
-    const neighbors::CellIndex index =
-        neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength, ctx);
+    neighbors::CellIndex index;
+    const classify::Classification four = classifyScene(ps, p, index, true, 4);
     const double h = p.smoothingLength, poly6 = 315.0 / (64.0 * M_PI * std::pow(h, 9)),
                  volume = std::pow(2 * sp.radius, 3);
-    const classify::Classification four = classify::classifyParticles(index, p, ctx, true, 4);
     size_t checked = 0;
     for (size_t i = 0; i < index.size(); ++i) {
         double cf = 0, g[3] = {0, 0, 0};
@@ -219,6 +218,7 @@ TEST(Classify, ColorFieldAndGradientMatchBruteForceInEitherRegisterWidth)
         ++checked;
     }
     EXPECT_EQ(checked, ps.size());
+    Context ctx;
     if (classify::classifyRegisterLanes() != 8) {
         EXPECT_THROW(classify::classifyParticles(index, p, ctx, false, 8), ValueError);
         GTEST_SKIP() << "no AVX2 here: only the SSE registers were checked";
