@@ -96,6 +96,13 @@ struct CellIndex
     /// ascending (z, y, x) cell order (deterministic).
     template <typename F> void forEachCellInBox(const double lo[3], const double hi[3], F&& f) const
     {
+        forEachCellInBox(*this, lo, hi, f);
+    }
+
+    /// The same with the cells looked up by finder.find(cx, cy, cz) (see NearbyCells).
+    template <typename Finder, typename F>
+    void forEachCellInBox(Finder& finder, const double lo[3], const double hi[3], F&& f) const
+    {
         int64_t c0[3], c1[3];
         for (int a = 0; a < 3; ++a) {
             c0[a] = cellCoord(lo[a], a);
@@ -104,10 +111,45 @@ struct CellIndex
         for (int64_t cz = c0[2]; cz <= c1[2]; ++cz)
             for (int64_t cy = c0[1]; cy <= c1[1]; ++cy)
                 for (int64_t cx = c0[0]; cx <= c1[0]; ++cx) {
-                    const CellRange r = find(cx, cy, cz);
+                    const CellRange r = finder.find(cx, cy, cz);
                     if (!r.empty()) f(r.begin, r.end);
                 }
     }
+};
+
+/// CellIndex::find for a walk that stays in one neighbourhood for a while, such as a thread's
+/// run of cells in index (Morton) order, each looking up the cells its box reaches: the last
+/// answer for each cell position modulo 8 per axis is kept, and checked by its key. A 4x4x4
+/// Morton block of cells and their reach fit without clashes, so most look-ups are answered
+/// from 8 KB here instead of a hash table of tens of MB (each probe a cache miss). One per
+/// thread.
+class NearbyCells
+{
+public:
+    explicit NearbyCells(const CellIndex& index) : mIndex(index)
+    {
+        for (Entry& e : mEntries)
+            e.key = CellIndex::kEmptyKey;
+    }
+    CellRange find(int64_t cx, int64_t cy, int64_t cz)
+    {
+        if (cx < 0 || cy < 0 || cz < 0 || cx >= mIndex.dims[0] || cy >= mIndex.dims[1] ||
+            cz >= mIndex.dims[2])
+            return {};
+        const uint64_t key = mortonKey(uint32_t(cx), uint32_t(cy), uint32_t(cz));
+        Entry& e = mEntries[(cx & 7) | (cy & 7) << 3 | (cz & 7) << 6];
+        if (e.key != key) e.key = key, e.range = mIndex.find(cx, cy, cz);
+        return e.range;
+    }
+
+private:
+    struct Entry
+    {
+        uint64_t key;
+        CellRange range;
+    };
+    const CellIndex& mIndex;
+    Entry mEntries[512];
 };
 
 /// The cell grid covering box: origin (a multiple of cellSize, at the corner of the lowest
