@@ -3,21 +3,26 @@
 
 #include <fluidsurf/Error.h>
 
+#include <tbb/parallel_for.h>
 #include <zlib.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <fcntl.h>
 #include <memory>
 #include <sys/stat.h>
+#include <unistd.h>
 
 namespace fluidsurf {
 namespace io_internal {
 
-std::vector<uint8_t> readFile(const std::string& path, const HeadCheck& check)
+namespace {
+/// The refusals of a path that is not a regular file we can read: InputError.
+void checkRegularFile(const std::string& path, struct stat& st)
 {
-    struct stat st;
     if (::stat(path.c_str(), &st) != 0)
         throw InputError(path + ": cannot open: " + std::strerror(errno));
     if (S_ISDIR(st.st_mode)) throw InputError(path + ": is a directory, not a file");
@@ -26,6 +31,13 @@ std::vector<uint8_t> readFile(const std::string& path, const HeadCheck& check)
     if (!S_ISREG(st.st_mode))
         throw InputError(path + ": not a regular file (a FIFO, device or socket); fluidsurf reads "
                                 "regular files only");
+}
+} // namespace
+
+std::vector<uint8_t> readFile(const std::string& path, const HeadCheck& check)
+{
+    struct stat st;
+    checkRegularFile(path, st);
     std::unique_ptr<FILE, int (*)(FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
     if (!f) throw InputError(path + ": cannot open: " + std::strerror(errno));
     std::vector<uint8_t> data;
@@ -45,6 +57,48 @@ std::vector<uint8_t> readFile(const std::string& path, const HeadCheck& check)
         data.insert(data.end(), chunk, chunk + n);
     if (std::ferror(f.get())) throw InputError(path + ": read error: " + std::strerror(errno));
     return data;
+}
+
+OpenFile::OpenFile(const std::string& path) : mPath(path)
+{
+    struct stat st;
+    checkRegularFile(path, st);
+    mFd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (mFd < 0) throw InputError(path + ": cannot open: " + std::strerror(errno));
+    mSize = uint64_t(st.st_size);
+}
+
+OpenFile::~OpenFile()
+{
+    if (mFd >= 0) ::close(mFd);
+}
+
+void OpenFile::readAt(uint64_t offset, void* dst, size_t n) const
+{
+    constexpr size_t kChunk = size_t(4) << 20; // 4 MiB: a thread's share, big enough for one call
+    const size_t chunks = (n + kChunk - 1) / kChunk;
+    std::atomic<int> error{0}; // errno of a failed read; -1: the file ended sooner
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        uint8_t* to = static_cast<uint8_t*>(dst) + c * kChunk;
+        size_t left = std::min(kChunk, n - c * kChunk);
+        uint64_t at = offset + c * kChunk;
+        while (left > 0 && error.load(std::memory_order_relaxed) == 0) {
+            const ssize_t got = ::pread(mFd, to, left, off_t(at));
+            if (got < 0 && errno == EINTR) continue;
+            if (got <= 0) {
+                int expected = 0;
+                error.compare_exchange_strong(expected, got < 0 ? errno : -1);
+                break;
+            }
+            to += got, at += uint64_t(got), left -= size_t(got);
+        }
+    });
+    if (error == -1)
+        throw InputError(mPath + ": the file ended at fewer than the " +
+                         std::to_string(offset + n) +
+                         " bytes it had when opened (changed "
+                         "while being read?)");
+    if (error) throw InputError(mPath + ": read error: " + std::strerror(error));
 }
 
 bool isGzip(const uint8_t* data, size_t size)

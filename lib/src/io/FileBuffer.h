@@ -17,6 +17,28 @@ using HeadCheck = std::function<void(const uint8_t* head, size_t headBytes, uint
 /// file, unreadable), or whatever check throws.
 std::vector<uint8_t> readFile(const std::string& path, const HeadCheck& check = {});
 
+/// A regular file open for reading at any offset, for a reader that puts the bytes where they
+/// belong instead of into a buffer first (readFile's refusals; closed when it goes).
+class OpenFile
+{
+public:
+    explicit OpenFile(const std::string& path);
+    ~OpenFile();
+    OpenFile(const OpenFile&) = delete;
+    OpenFile& operator=(const OpenFile&) = delete;
+
+    uint64_t size() const { return mSize; }
+    /// n bytes from `offset` into dst, in chunks read by all threads (the kernel's copy and the
+    /// page faults of fresh memory are most of a raw format's reading): InputError on an error
+    /// or when the file ends sooner (it shrank since it was opened).
+    void readAt(uint64_t offset, void* dst, size_t n) const;
+
+private:
+    std::string mPath;
+    int mFd = -1;
+    uint64_t mSize = 0;
+};
+
 bool isGzip(const uint8_t* data, size_t size);
 
 /// Inflate a gzip stream (growing the output as data arrives: no size is trusted up front).

@@ -23,6 +23,11 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
 void checkXyzSize(const uint8_t* head, size_t headBytes, uint64_t fileBytes,
                   const std::string& src);
 ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+/// Whether a .xyz whose first bytes are these is text (read as CSV), not raw float32.
+bool isTextXyz(const uint8_t* head, size_t headBytes);
+class OpenFile;
+/// A raw .xyz (checkXyzSize passed) straight from the file into the positions.
+ParticleSet readXyz(const OpenFile& file, std::string* detail);
 ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src,

@@ -2,6 +2,7 @@
 // splashsurf). A text file named .xyz (the other common meaning of the extension) is
 // recognised and handed to the CSV reader instead of being misread as binary.
 #include "io/ByteReader.h"
+#include "io/FileBuffer.h"
 #include "io/Formats.h"
 #include "io/TextParse.h"
 
@@ -10,8 +11,7 @@
 namespace fluidsurf {
 namespace io_internal {
 
-namespace {
-bool looksLikeNumericText(const uint8_t* d, size_t size)
+bool isTextXyz(const uint8_t* d, size_t size)
 {
     const size_t n = std::min<size_t>(size, 4096);
     if (n == 0) return false;
@@ -23,11 +23,10 @@ bool looksLikeNumericText(const uint8_t* d, size_t size)
     }
     return true;
 }
-} // namespace
 
 void checkXyzSize(const uint8_t* head, size_t headBytes, uint64_t fileBytes, const std::string& src)
 {
-    if (looksLikeNumericText(head, headBytes) || fileBytes % 12 == 0) return;
+    if (isTextXyz(head, headBytes) || fileBytes % 12 == 0) return;
     throw InputError(src + ": raw .xyz size " + std::to_string(fileBytes) +
                      " is not a multiple of 12 bytes (3 float32 per particle): truncated or not "
                      "raw float32 xyz (at byte " +
@@ -36,7 +35,7 @@ void checkXyzSize(const uint8_t* head, size_t headBytes, uint64_t fileBytes, con
 
 ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
 {
-    if (looksLikeNumericText(data, size)) {
+    if (isTextXyz(data, size)) {
         ParticleSet set = readCsv(data, size, src, detail);
         if (detail) *detail = "ASCII text (" + *detail + ")";
         return set;
@@ -49,6 +48,15 @@ ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, st
     ParticleSet set;
     set.positions.resize(size / 12);
     if (size) std::memcpy(set.positions.data(), data, size); // little-endian host
+    if (detail) *detail = "raw float32 little-endian";
+    return set;
+}
+
+ParticleSet readXyz(const OpenFile& file, std::string* detail)
+{
+    ParticleSet set;
+    set.positions.resize(size_t(file.size() / 12));
+    file.readAt(0, set.positions.data(), set.positions.size() * 12); // little-endian host
     if (detail) *detail = "raw float32 little-endian";
     return set;
 }

@@ -112,3 +112,66 @@ TEST(Npy, WrongShapeOrTypeNamed)
                   .find("promises 5"),
               std::string::npos);
 }
+
+TEST(Xyz, FilesAreReadByChunksStraightIntoThePositions)
+{
+    // A raw .xyz file is read by all threads in 4 MiB chunks into the positions: 1,000,003
+    // particles (12 MB, not a whole number of chunks), every coordinate a different value.
+    TempDir dir;
+    const size_t n = 1000003;
+    std::string bytes(12 * n, '\0');
+    auto coordinate = [](size_t i, int a) { return float(3 * i + size_t(a)) * 0.25f - 1e5f; };
+    for (size_t i = 0; i < n; ++i)
+        for (int a = 0; a < 3; ++a) {
+            const float v = coordinate(i, a);
+            std::memcpy(&bytes[12 * i + 4 * size_t(a)], &v, 4);
+        }
+    writeFile(dir.path("big.xyz"), bytes);
+    io::ReadInfo info;
+    const ParticleSet ps = io::readParticles(dir.path("big.xyz"), {}, &info);
+    ASSERT_EQ(ps.size(), n);
+    for (size_t i = 0; i < n; ++i)
+        ASSERT_EQ(ps.positions[i], Vec3f(coordinate(i, 0), coordinate(i, 1), coordinate(i, 2)))
+            << i;
+    EXPECT_EQ(info.fileBytes, 12 * n);
+    EXPECT_EQ(info.detail, "raw float32 little-endian");
+
+    // the common checks still apply: two non-finite particles, the first one named
+    const float nan = std::nanf(""), inf = INFINITY;
+    std::memcpy(&bytes[12 * 700001 + 4], &nan, 4);
+    std::memcpy(&bytes[12 * 900000], &inf, 4);
+    writeFile(dir.path("nan.xyz"), bytes);
+    try {
+        io::readParticles(dir.path("nan.xyz"));
+        ADD_FAILURE() << "non-finite positions were read";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("2 particle(s) have NaN/Inf coordinates (first: "
+                                             "particle 700001)"),
+                  std::string::npos)
+            << e.what();
+    }
+    io::ReadOptions drop;
+    drop.dropNonFinite = true;
+    EXPECT_EQ(io::readParticles(dir.path("nan.xyz"), drop, &info).size(), n - 2);
+    EXPECT_EQ(info.droppedNonFinite, 2u);
+
+    // and the refusals by size, by content and of an empty file; text is still CSV
+    auto error = [&](const std::string& name, const std::string& content) {
+        writeFile(dir.path(name), content);
+        try {
+            io::readParticles(dir.path(name));
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    EXPECT_NE(error("cut.xyz", bytes.substr(0, 12 * 1000 + 5)).find("not a multiple of 12"),
+              std::string::npos);
+    EXPECT_NE(error("ply.xyz",
+                    "ply\nformat binary_little_endian 1.0\nend_header\n" + bytes.substr(0, 120))
+                  .find("the name says raw XYZ but the content is PLY"),
+              std::string::npos);
+    EXPECT_NE(error("empty.xyz", "").find("file is empty"), std::string::npos);
+    writeFile(dir.path("text.xyz"), "1 2 3\n4 5 6\n");
+    EXPECT_EQ(io::readParticles(dir.path("text.xyz")).positions[1], Vec3f(4.f, 5.f, 6.f));
+}
