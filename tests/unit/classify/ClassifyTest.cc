@@ -40,6 +40,18 @@ void jitter(ParticleSet& ps, uint64_t seed, double amount)
             v[a] += float(uniform(seed) * amount);
 }
 
+/// A drop of `count` particles with `droplets` stray ones (Scene::Drop at the default radius,
+/// sp's), every coordinate jittered by up to +-jitterRadii/2 radii (see jitter).
+ParticleSet jitteredDrop(SceneParams& sp, size_t count, int droplets, uint64_t seed,
+                         double jitterRadii)
+{
+    sp.count = count;
+    sp.droplets = droplets;
+    ParticleSet ps = generateScene(Scene::Drop, sp);
+    jitter(ps, seed, jitterRadii * sp.radius);
+    return ps;
+}
+
 /// Neighbours within h of each particle, in file order, by brute force.
 std::vector<int> bruteForceCounts(const ParticleSet& ps, double h)
 {
@@ -136,10 +148,7 @@ TEST(Classify, NormalsPointOutOfTheBlockAndFollowASelection)
 TEST(Classify, NeighbourCountsMatchBruteForce)
 {
     SceneParams sp;
-    sp.count = 3000;
-    sp.droplets = 4;
-    ParticleSet ps = generateScene(Scene::Drop, sp);
-    jitter(ps, 7, 0.2 * sp.radius);
+    ParticleSet ps = jitteredDrop(sp, 3000, 4, 7, 0.2);
     const Params p = Params::fromRadius(sp.radius);
     neighbors::CellIndex index;
     const classify::Classification c = classifyScene(ps, p, index);
@@ -157,9 +166,7 @@ TEST(Classify, NearCoincidentPileSharesExactSums)
     // them), inside a jittered drop: the pile costs one neighbourhood pass per spot, and every
     // count still matches brute force (the noise is far below the spot tolerance, h/4096).
     SceneParams sp;
-    sp.count = 3000;
-    ParticleSet ps = generateScene(Scene::Drop, sp);
-    jitter(ps, 11, 0.2 * sp.radius);
+    ParticleSet ps = jitteredDrop(sp, 3000, sp.droplets, 11, 0.2);
     uint64_t seed = 13;
     const uint32_t fluid = uint32_t(ps.size()), at = fluid / 2;
     const Vec3f spot = ps.positions[at];
@@ -188,10 +195,7 @@ TEST(Classify, ColorFieldAndGradientMatchBruteForceInEitherRegisterWidth)
     // rounding, and the two register widths (two SSE registers, one AVX one) bit for bit: they
     // stand for the device's sums too (cuda/src/Classify.cu runs the same lanes).
     SceneParams sp;
-    sp.count = 2500;
-    sp.droplets = 3;
-    ParticleSet ps = generateScene(Scene::Drop, sp);
-    jitter(ps, 5, 0.3 * sp.radius);
+    ParticleSet ps = jitteredDrop(sp, 2500, 3, 5, 0.3);
     const Params p = Params::fromRadius(sp.radius);
     neighbors::CellIndex index;
     const classify::Classification four = classifyScene(ps, p, index, true, 4);
@@ -288,10 +292,7 @@ TEST(Classify, GroupsOutOfReachAreSkippedWithoutChangingABit)
     // particle: about half of them. The sums must still be those of every candidate, bit for
     // bit (the device sums every one), with uniform volumes and with per-particle radii.
     SceneParams sp;
-    sp.count = 4000;
-    sp.droplets = 5;
-    ParticleSet ps = generateScene(Scene::Drop, sp);
-    jitter(ps, 17, 0.3 * sp.radius);
+    ParticleSet ps = jitteredDrop(sp, 4000, 5, 17, 0.3);
     uint64_t seed = 19;
     std::vector<float> radii(ps.size());
     for (float& r : radii)
