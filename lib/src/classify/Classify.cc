@@ -39,7 +39,6 @@ struct Neighbourhood
     std::vector<float> x, y, z, v;
     /// per group, padded to a multiple of util::kLanes with groups out of every reach
     std::vector<float> x0, x1, y0, y1, z0, z1;
-    size_t size = 0; ///< candidates, padding included
 
     /// The particles of index's cells overlapping [lo, hi] (CellIndex::forEachCellInBox's
     /// order), relative to o; volumes from the radii, or uniformVolume without them.
@@ -53,7 +52,7 @@ struct Neighbourhood
             mRanges.push_back({b, e});
             m += e - b;
         });
-        size = (m + kClassLanes - 1) / kClassLanes * kClassLanes;
+        const size_t size = (m + kClassLanes - 1) / kClassLanes * kClassLanes;
         for (std::vector<float>* c : {&x, &y, &z, &v})
             c->resize(size);
         size_t k = 0;
@@ -122,6 +121,7 @@ size_t liveGroups(const Neighbourhood& nb, float px, float py, float pz, float h
     }
     return n;
 }
+
 /// One particle's neighbour sums, lane by lane (ClassRule.h).
 struct LaneSums
 {
