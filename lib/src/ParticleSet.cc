@@ -2,6 +2,9 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/ParticleSet.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <cstring>
 
@@ -109,12 +112,25 @@ Attribute& ParticleSet::addInt(const std::string& name, int components, std::vec
     return attributes.back();
 }
 
+BBox3f boundsOf(const Vec3f* positions, size_t n)
+{
+    return tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, 1 << 16), BBox3f(),
+        [&](const tbb::blocked_range<size_t>& r, BBox3f b) {
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                b.expand(positions[i]);
+            return b;
+        },
+        [](BBox3f a, const BBox3f& b) {
+            for (int k = 0; k < 3; ++k)
+                a.min[k] = std::min(a.min[k], b.min[k]), a.max[k] = std::max(a.max[k], b.max[k]);
+            return a;
+        });
+}
+
 BBox3f ParticleSet::bbox() const
 {
-    BBox3f box;
-    for (const Vec3f& p : positions)
-        box.expand(p);
-    return box;
+    return boundsOf(positions.data(), positions.size());
 }
 
 void ParticleSet::validate() const

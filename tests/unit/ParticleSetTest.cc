@@ -41,3 +41,27 @@ TEST(ParticleSet, DropNonFiniteKeepsAttributesAligned)
     EXPECT_EQ(ps.find("v")->floats, (std::vector<float>{0, 0, 0, 2, 2, 2, 4, 4, 4}));
     EXPECT_EQ(ps.positions[2], Vec3f(4, 4, 4));
 }
+
+TEST(ParticleSet, BoundsOnAllThreadsAreThePointsExtremes)
+{
+    // 300,001 points over several of boundsOf's chunks, each axis' extremes placed by hand in
+    // different chunks; the bounds are exactly theirs, and those of no points are empty.
+    ParticleSet ps;
+    uint64_t seed = 5;
+    auto next = [&] {
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        return float(double(seed >> 40) / double(1 << 24)) * 2.f - 1.f; // [-1, 1)
+    };
+    for (int i = 0; i < 300001; ++i)
+        ps.positions.push_back(Vec3f(next(), next(), next()));
+    ps.positions[7].x = -3.5f, ps.positions[299999].x = 2.25f;
+    ps.positions[70000].y = -1.75f, ps.positions[150000].y = 4.f;
+    ps.positions[300000].z = -8.f, ps.positions[200000].z = 1.5f;
+    const BBox3f b = ps.bbox();
+    EXPECT_EQ(b.min, Vec3f(-3.5f, -1.75f, -8.f));
+    EXPECT_EQ(b.max, Vec3f(2.25f, 4.f, 1.5f));
+    EXPECT_TRUE(boundsOf(ps.positions.data(), 0).empty());
+    const BBox3f one = boundsOf(&ps.positions[70000], 1);
+    EXPECT_EQ(one.min, ps.positions[70000]);
+    EXPECT_EQ(one.max, ps.positions[70000]);
+}

@@ -52,7 +52,7 @@ public:
     Attribute& addFloat(const std::string& name, int components, std::vector<float> values);
     Attribute& addInt(const std::string& name, int components, std::vector<int64_t> values);
 
-    BBox3f bbox() const;
+    BBox3f bbox() const; ///< boundsOf(positions)
 
     /// Throws ValueError when an attribute's length does not match the particle count.
     void validate() const;
@@ -65,5 +65,8 @@ public:
 const char* roleName(AttributeRole role);
 /// Whether name is one of the aliases by which ParticleSet::find(role) looks ("Rhop": density).
 bool isRoleAlias(AttributeRole role, const std::string& name);
+
+/// The bounds of n points, on all threads (exact: min and max in any order); empty for none.
+BBox3f boundsOf(const Vec3f* positions, size_t n);
 
 } // namespace fluidsurf

@@ -2,6 +2,7 @@
 #include "narrowband/NarrowBand.h"
 
 #include <fluidsurf/Error.h>
+#include <fluidsurf/ParticleSet.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -82,9 +83,7 @@ openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const P
                                   const Level& level)
 {
     if (particles.size() == 0) return openvdb::CoordBBox(); // empty
-    BBox3f box;
-    for (const Vec3f& p : particles.positions)
-        box.expand(p);
+    const BBox3f box = boundsOf(particles.positions.data(), particles.size());
     const double inv = 1 / level.voxelSize, R = params.influenceRadius;
     openvdb::Coord lo, hi;
     for (int a = 0; a < 3; ++a) {

@@ -5,9 +5,9 @@
 #include "util/RadixSort.h"
 
 #include <fluidsurf/Error.h>
+#include <fluidsurf/ParticleSet.h>
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -90,19 +90,7 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
         index.starts.push_back(0);
         return index;
     }
-    // (min and max: exact in any order)
-    const BBox3f box = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, n, 1 << 16), BBox3f(),
-        [&](const tbb::blocked_range<size_t>& r, BBox3f b) {
-            for (size_t i = r.begin(); i != r.end(); ++i)
-                b.expand(positions[i]);
-            return b;
-        },
-        [](BBox3f a, const BBox3f& b) {
-            for (int k = 0; k < 3; ++k)
-                a.min[k] = std::min(a.min[k], b.min[k]), a.max[k] = std::max(a.max[k], b.max[k]);
-            return a;
-        });
+    const BBox3f box = boundsOf(positions, n);
     cellGrid(box, cellSize, index.origin, index.dims);
     std::vector<Handle, util::NoInitAllocator<Handle>> handles(n); // filled in parallel below
     tbb::parallel_for(

@@ -3,6 +3,8 @@
 
 #include "neighbors/CellIndex.h"
 
+#include <fluidsurf/ParticleSet.h>
+
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -14,9 +16,7 @@ namespace neighbors {
 
 bool exceedsCellRange(const std::vector<Vec3f>& positions, double cellSize)
 {
-    BBox3f box;
-    for (const Vec3f& p : positions)
-        box.expand(p);
+    const BBox3f box = boundsOf(positions.data(), positions.size());
     if (box.empty()) return false;
     for (int a = 0; a < 3; ++a) {
         const double origin = std::floor(double(box.min[a]) / cellSize) * cellSize;
