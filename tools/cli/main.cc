@@ -2,16 +2,13 @@
 // one message on stderr and a non-zero exit code.
 #include "Commands.h"
 #include "Options.h"
+#include "ProcessMemory.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/Version.h>
 
 #include <iostream>
 #include <string>
-
-#ifdef __GLIBC__
-#include <malloc.h>
-#endif
 
 namespace {
 
@@ -46,13 +43,7 @@ std::string oneLine(const std::string& s)
 int main(int argc, char** argv)
 {
     using namespace fluidsurf;
-#ifdef __GLIBC__
-    // Arrays of a MiB and more are mapped and unmapped whole. glibc's default raises that
-    // threshold to the largest block freed so far (up to 32 MiB), after which the stages'
-    // large arrays come from the heap and their holes stay resident: 40 MB more peak on the
-    // 1.7M-particle frame, for ~1% more time (fresh pages).
-    mallopt(M_MMAP_THRESHOLD, 1 << 20);
-#endif
+    cli::setUpProcessMemory(); // first: before the stages allocate
     CLI::App app{"fluidsurf " FLUIDSURF_VERSION_STRING
                  " - SPH particle frames to OpenVDB level sets and triangle meshes"};
     app.set_version_flag("--version", std::string("fluidsurf ") + FLUIDSURF_VERSION_STRING);
