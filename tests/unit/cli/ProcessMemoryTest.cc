@@ -18,15 +18,10 @@
 
 namespace {
 
-struct Found
-{
-    uintptr_t symtab = 0;
-};
-
 /// The address of libopenvdb's dynamic symbol table, read from its own .dynamic.
 uintptr_t openvdbSymbolTable()
 {
-    Found found;
+    uintptr_t symtab = 0;
     dl_iterate_phdr(
         [](dl_phdr_info* info, size_t, void* out) {
             if (!info->dlpi_name || !std::strstr(info->dlpi_name, "libopenvdb.so")) {
@@ -37,11 +32,11 @@ uintptr_t openvdbSymbolTable()
                     for (auto* d = reinterpret_cast<const ElfW(Dyn)*>(info->dlpi_addr +
                                                                       info->dlpi_phdr[i].p_vaddr);
                          d->d_tag != DT_NULL; ++d)
-                        if (d->d_tag == DT_SYMTAB) static_cast<Found*>(out)->symtab = d->d_un.d_ptr;
+                        if (d->d_tag == DT_SYMTAB) *static_cast<uintptr_t*>(out) = d->d_un.d_ptr;
             return 1;
         },
-        &found);
-    return found.symtab;
+        &symtab);
+    return symtab;
 }
 
 /// Resident KiB of the mapping that holds address `at` (/proc/self/smaps), -1 if none does.
