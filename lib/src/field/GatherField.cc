@@ -74,7 +74,7 @@ wideSums(const float* X, const float* Y, const float* Z, const float* Rr, uint32
         const WideLanes s2 = (ex * ex + ey * ey + ez * ez) * invR2;
         addParticle<Ssp07, Radii>(acc, ex, ey, ez, s2, r);
     }
-    return toFieldSums(acc);
+    return toFieldSumsWide(acc);
 }
 
 struct Kernel

@@ -2,8 +2,10 @@
 // trigonometry (FieldMath.h) against acos/cos and Jacobi rotations, the gather's sums on 4
 // lanes (SSE2) and on 8 (AVX2, where the CPU has it) against the brute-force field
 // (BruteForce.h), so that both paths stay tested whichever this machine takes by default, and
-// the four-at-once values (FieldValueWide.h) bit for bit against fieldValue.
+// the four-at-once values (FieldValueWide.h) bit for bit against fieldValue, and the 8 lanes'
+// sums added at once (toFieldSumsWide) bit for bit against their grouping written out.
 #include "field/FieldMath.h"
+#include "field/FieldValue.h"
 #include "field/FieldValueWide.h"
 #include "field/GatherField.h"
 #include "unit/field/BruteForce.h"
@@ -212,4 +214,57 @@ TEST(GatherField, LanesOtherThanFourOrWhatTheCpuHasAreRefused)
     for (int lanes : {0, 16, field::fieldLanes() == 8 ? 2 : 8})
         EXPECT_THROW(field::evaluateField(tree, index, p, p.level(), ctx, lanes), ValueError)
             << lanes;
+}
+
+namespace {
+
+/// The 8-lane sums of acc, added at once (toFieldSumsWide), where the CPU has AVX2.
+__attribute__((target("avx2,fma"))) field::FieldSums
+wideSumsOf(const field::PartialSums<util::WideLanes>& acc)
+{
+    return field::toFieldSumsWide(acc);
+}
+
+} // namespace
+
+TEST(FieldMath, EightLaneSumsAtOnceKeepTheGroupingBitForBit)
+{
+    if (field::fieldLanes() != 8) GTEST_SKIP() << "this CPU has no AVX2: the path is not taken";
+    // lanes of mixed signs and magnitudes (1e-6 to 1e6, and zeros of either sign), where the
+    // grouping of the adds decides the last bits
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> exponent(-6, 6), sign(-1, 1);
+    auto lane = [&](int i) {
+        if (i % 29 == 0) return i % 2 ? -0.f : 0.f;
+        return float((sign(rng) < 0 ? -1 : 1) * std::pow(10.0, exponent(rng)));
+    };
+    // the grouping, written out: ((v0 + v1) + (v2 + v3)) + ((v4 + v5) + (v6 + v7)) in float
+    auto grouped = [](const util::WideLanes& v) {
+        const float a = v[0] + v[1], b = v[2] + v[3], c = v[4] + v[5], d = v[6] + v[7];
+        return double((a + b) + (c + d));
+    };
+    size_t compared = 0, differ = 0, orderMatters = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        field::PartialSums<util::WideLanes> acc;
+        util::WideLanes* all[14] = {&acc.w,  &acc.d0, &acc.d1, &acc.d2, &acc.r,  &acc.g0, &acc.g1,
+                                    &acc.g2, &acc.m0, &acc.m1, &acc.m2, &acc.m3, &acc.m4, &acc.m5};
+        for (int k = 0; k < 14; ++k)
+            for (int l = 0; l < 8; ++l)
+                (*all[k])[l] = lane(trial * 112 + k * 8 + l);
+        const field::FieldSums s = wideSumsOf(acc);
+        const double got[14] = {s.w,    s.d[0], s.d[1], s.d[2], s.r,    s.g[0], s.g[1],
+                                s.g[2], s.m[0], s.m[1], s.m[2], s.m[3], s.m[4], s.m[5]};
+        for (int k = 0; k < 14; ++k) {
+            const double want = grouped(*all[k]);
+            differ += std::memcmp(&got[k], &want, sizeof want) != 0;
+            ++compared;
+            float inOrder = 0; // the lanes added one after another: other bits, as a rule
+            for (int l = 0; l < 8; ++l)
+                inOrder += (*all[k])[l];
+            orderMatters += double(inOrder) != want;
+        }
+    }
+    EXPECT_EQ(differ, 0u) << "of " << compared << " sums";
+    // the data can tell groupings apart: else the comparison above would prove nothing
+    EXPECT_GT(orderMatters, compared / 10) << "of " << compared;
 }
