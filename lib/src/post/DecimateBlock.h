@@ -429,14 +429,17 @@ private:
         // squares, without roots. Each remaining triangle of v's fan is (v, u, w) in its own
         // order, with only v moving, from x to the new point q.
         const Vec3d& q = col.point;
+        mFan.clear();
         for (const uint32_t v : {a, b}) {
+            if (v == b) mSecondFan = mFan.size();
             const Vec3d x = point(v);
             for (uint32_t t : v == a ? mTa : mTb) {
                 if (t == shared[0] || t == shared[1]) continue;
                 const Tri& tri = mTris[t];
                 const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
-                const Vec3d& u = point(tri[(k + 1) % 3]);
-                const Vec3d& w = point(tri[(k + 2) % 3]);
+                const Tri ids{v, tri[(k + 1) % 3], tri[(k + 2) % 3]};
+                const Vec3d& u = point(ids[1]);
+                const Vec3d& w = point(ids[2]);
                 const Vec3d n0 = (u - x).cross(w - x), n1 = (u - q).cross(w - q);
                 const double turn = n0.dot(n1), l0 = n0.lengthSqr(), l1 = n1.lengthSqr();
                 if (!(l1 > 0) || turn < 0 || turn * turn < kMaxTurnCos2 * l0 * l1)
@@ -450,6 +453,7 @@ private:
                     const double sides0 = uw * ux * wx, short0 = std::min({uw, ux, wx});
                     if (l1 * short1 * sides0 < l0 * short0 * sides1) return refuse(a, b, shared);
                 }
+                mFan.push_back({t, ids, u, w, n0});
             }
         }
         // the topology: the ends' neighbours, marked with stamps (no sorting)
@@ -478,35 +482,30 @@ private:
             return double(std::max(
                 {mS.drift[mGlobal[t[0]]], mS.drift[mGlobal[t[1]]], mS.drift[mGlobal[t[2]]]}));
         };
-        auto driftTo = [&](const Vec3d& x, const Vec3d& u, const Vec3d& w, const Tri& t) {
-            const Vec3d n0 = (u - x).cross(w - x);
+        auto driftTo = [&](const Vec3d& x, const Vec3d& n0, const Tri& t) {
             const double l0 = n0.length();
             if (l0 > 0) drift = std::max(drift, std::abs(n0.dot(q - x)) / l0 + far(t));
         };
-        mStep.start(q);
-        // the two that go, first (see StepGuard): each a segment from q to its far corner now
+        // the two that go (see StepGuard), then the others as the shape guard saw them
+        std::array<Vec3d, 4> gone[2];
+        Vec3d acrossPoints[2];
         for (int g = 0; g < 2; ++g) {
             const Tri& tri = mTris[shared[g]];
             const Vec3d &x = point(tri[0]), &u = point(tri[1]), &w = point(tri[2]);
-            driftTo(x, u, w, tri);
-            if (stepBound) mStep.addGone(tri, x, u, w, opposite[g], point(opposite[g]));
+            gone[g] = {x, u, w, (u - x).cross(w - x)};
+            acrossPoints[g] = point(opposite[g]);
+            driftTo(x, gone[g][3], tri);
         }
-        // the others, (v, u, w) with only v moving from x to q
-        for (const uint32_t v : {a, b}) {
-            if (v == b) mStep.startSecondFan();
-            const Vec3d x = point(v);
-            for (uint32_t t : v == a ? mTa : mTb) {
-                if (t == shared[0] || t == shared[1]) continue;
-                const Tri& tri = mTris[t];
-                const int k = tri[0] == v ? 0 : tri[1] == v ? 1 : 2;
-                const Tri ids{v, tri[(k + 1) % 3], tri[(k + 2) % 3]};
-                const Vec3d &u = point(ids[1]), &w = point(ids[2]);
-                driftTo(x, u, w, tri);
-                if (stepBound) mStep.addMoved(ids, x, u, w);
-            }
-        }
+        const Vec3d &pa = point(a), &pb = point(b);
+        for (size_t i = 0; i < mFan.size(); ++i)
+            driftTo(i < mSecondFan ? pa : pb, mFan[i].n0, mTris[mFan[i].t]);
         if (drift > mMaxDrift) return refuse(a, b, shared);
-        if (stepBound && !mStep.accepts(point(a), point(b))) return refuse(a, b, shared);
+        if (stepBound) {
+            const Tri goneIds[2] = {mTris[shared[0]], mTris[shared[1]]};
+            mStep.start(q, gone, goneIds, opposite, acrossPoints);
+            if (!mStep.accepts(pa, pb, mFan.data(), mFan.size(), mSecondFan))
+                return refuse(a, b, shared);
+        }
         error = col.error;
 
         // commit: b merges into a
@@ -555,8 +554,12 @@ private:
     std::vector<uint32_t> mMark; ///< per vertex: the stamp of the last neighbour walk it was in
     uint32_t mStamp = 0;
     std::vector<uint32_t> mTa, mTb, mTc; // scratch
-    std::vector<uint32_t> mRing;         ///< the last collapse's vertex' neighbours
-    Entry mLast{};                       ///< the last entry popped in heap order (see touch)
+    /// The remaining triangles of the collapse being tried, for all its guards: a's fan, then
+    /// b's from mSecondFan.
+    std::vector<FanTriangle> mFan;
+    size_t mSecondFan = 0;
+    std::vector<uint32_t> mRing; ///< the last collapse's vertex' neighbours
+    Entry mLast{};               ///< the last entry popped in heap order (see touch)
     bool mPopped = false;
 };
 

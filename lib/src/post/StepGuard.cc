@@ -1,8 +1,10 @@
 // StepGuard.cc - how far one collapse moves the surface (see StepGuard.h).
 //
-// Each fan's triangles are set up once (NearTriangle) for the dozens of questions a collapse
-// asks; each point is tried first against the triangle it came from and those by its ring
-// vertex, where it lies as a rule; and a flat fan is let through without a point tested.
+// A flat fan is let through without a point tested (isFlat), from the normals the caller has
+// found already and the fans where the caller keeps them; only otherwise are the fans copied and
+// set up once (NearTriangle) for the dozens of questions the collapse asks, and each point is
+// tried first against the triangle it came from and those by its ring vertex, where it lies as
+// a rule.
 #include "post/StepGuard.h"
 
 #include <algorithm>
@@ -11,47 +13,55 @@
 namespace fluidsurf {
 namespace post {
 
-void StepGuard::start(const Vec3d& q)
+void StepGuard::start(const Vec3d& q, const std::array<Vec3d, 4> (&gone)[2], const Ids (&ids)[2],
+                      const uint32_t (&across)[2], const Vec3d (&acrossPoints)[2])
 {
     mQ = q;
+    for (int g = 0; g < 2; ++g)
+        mGone[g] = gone[g], mGoneIds[g] = ids[g], mAcross[g] = across[g],
+        mAcrossPoint[g] = acrossPoints[g];
+}
+
+void StepGuard::prepare()
+{
     mOld.clear(), mOldIds.clear(), mAfter.clear(), mNewIds.clear(), mFar.clear();
-    mSecond = 0;
+    for (int g = 0; g < 2; ++g) {
+        const auto& [x, u, w, n] = mGone[g];
+        mOld.emplace_back(x, u, w);
+        mOldIds.push_back(mGoneIds[g]);
+        // the old triangle's middle, standing for the surface it covered: near the same
+        // triangle moved when that moved it less than the bound; a segment has none
+        const Vec3d middle = (x + u + w) / 3.0;
+        if (((mQ + mQ + mAcrossPoint[g]) / 3.0 - middle).length() > mBound)
+            mFar.push_back({middle, kNone, mAcross[g]}); // by its far corner, as a rule
+    }
+    for (size_t i = 0; i < mFanSize; ++i) {
+        const FanTriangle& f = mFan[i];
+        const Vec3d& x = from(i);
+        if ((mQ - x).length() > 3 * mBound) // its middle moved a third of that
+            mFar.push_back({(x + f.u + f.w) / 3.0, uint32_t(i), f.ids[1]});
+        mOld.emplace_back(x, f.u, f.w);
+        mOldIds.push_back(f.ids);
+        mAfter.push_back({mQ, f.u, f.w, x});
+        mNewIds.push_back(f.ids); // v's id stands for q's: only the others are asked
+    }
 }
 
-void StepGuard::addGone(const Ids& ids, const Vec3d& x, const Vec3d& u, const Vec3d& w,
-                        uint32_t across, const Vec3d& acrossPoint)
+bool StepGuard::accepts(const Vec3d& a, const Vec3d& b, const FanTriangle* fan, size_t n,
+                        size_t second)
 {
-    mOld.emplace_back(x, u, w);
-    mOldIds.push_back(ids);
-    // the old triangle's middle, standing for the surface it covered: near the same triangle
-    // moved when that moved it less than the bound; a segment has none
-    const Vec3d middle = (x + u + w) / 3.0;
-    if (((mQ + mQ + acrossPoint) / 3.0 - middle).length() > mBound)
-        mFar.push_back({middle, kNone, across}); // by its far corner, as a rule
-}
-
-void StepGuard::addMoved(const Ids& ids, const Vec3d& x, const Vec3d& u, const Vec3d& w)
-{
-    if ((mQ - x).length() > 3 * mBound) // its middle moved a third of that
-        mFar.push_back({(x + u + w) / 3.0, uint32_t(mAfter.size()), ids[1]});
-    mOld.emplace_back(x, u, w);
-    mOldIds.push_back(ids);
-    mAfter.push_back({mQ, u, w, x});
-    mNewIds.push_back(ids); // v's id stands for q's: only the others are asked
-}
-
-bool StepGuard::accepts(const Vec3d& a, const Vec3d& b)
-{
+    mA = &a, mB = &b, mFan = fan, mFanSize = n, mSecond = second;
     const Vec3d& p = mQ;
     const double bound2 = mBound * mBound;
-    if (isFlat(a, b)) return true;
+    if (isFlat()) return true;
+    prepare();
     bool nearOld = false;
     const Vec3d* ends[2] = {&a, &b};
     for (int e = 0; e < 2; ++e) // an end that moves less than the bound is near all new
         if ((*ends[e] - p).length() <= mBound)
             nearOld = true;
         else
-            mFar.push_back({*ends[e], e == 0 ? 0u : mSecond, kNone}); // its fan first
+            mFar.push_back({*ends[e], e == 0 ? 0u : uint32_t(mSecond), kNone}); // its fan first
     for (size_t i = 0; i < mOld.size() && !nearOld; ++i)
         nearOld = mOld[i].within(p, bound2);
     if (!nearOld) return false;
@@ -76,17 +86,22 @@ bool StepGuard::accepts(const Vec3d& a, const Vec3d& b)
 /// bounds in the slab's plane (a simple polygon: star-shaped around p), and so is the old one,
 /// whose every triangle faces the normal and whose border is the same ring; each point of
 /// either has a point of the other straight above or below it, within the slab.
-bool StepGuard::isFlat(const Vec3d& a, const Vec3d& b) const
+bool StepGuard::isFlat() const
 {
     const Vec3d& p = mQ;
+    const Vec3d &a = *mA, &b = *mB;
     Vec3d n(0.0); // the old fan's area-weighted normal
-    for (const NearTriangle& t : mOld)
-        n += t.normal();
+    for (const auto& g : mGone)
+        n += g[3];
+    for (size_t i = 0; i < mFanSize; ++i)
+        n += mFan[i].n0;
     const double len = n.length();
     if (!(len > 0)) return false;
     n /= len;
-    for (const NearTriangle& t : mOld)
-        if (!(t.normal().dot(n) > 0)) return false;
+    for (const auto& g : mGone)
+        if (!(g[3].dot(n) > 0)) return false;
+    for (size_t i = 0; i < mFanSize; ++i)
+        if (!(mFan[i].n0.dot(n) > 0)) return false;
     double lo = 0, hi = (b - a).dot(n);
     if (hi < lo) std::swap(lo, hi);
     auto inSlab = [&](const Vec3d& q) {
@@ -100,10 +115,10 @@ bool StepGuard::isFlat(const Vec3d& a, const Vec3d& b) const
     const Vec3d e = std::abs(n[0]) < 0.9 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
     const Vec3d across = n.cross(e); // the ray runs along n x across, from p
     size_t crossings = 0;
-    for (const auto& t : mAfter) { // (p, u, w) with u -> w a side of the ring
-        if (!((t[1] - p).cross(t[2] - p).dot(n) > 0) || !inSlab(t[1]) || !inSlab(t[2]))
-            return false;
-        crossings += (t[1] - p).dot(across) < 0 && (t[2] - p).dot(across) >= 0;
+    for (size_t i = 0; i < mFanSize; ++i) { // (p, u, w) with u -> w a side of the ring
+        const Vec3d &u = mFan[i].u, &w = mFan[i].w;
+        if (!((u - p).cross(w - p).dot(n) > 0) || !inSlab(u) || !inSlab(w)) return false;
+        crossings += (u - p).dot(across) < 0 && (w - p).dot(across) >= 0;
     }
     return crossings == 1;
 }

@@ -20,9 +20,19 @@
 namespace fluidsurf {
 namespace post {
 
-/// The two fans of one collapse, filled in this order: start(), the two triangles that go
-/// (addGone), the remaining triangles of one end's fan (addMoved), startSecondFan(), those of
-/// the other's; then accepts(). Vertex ids are the caller's, used only to say which
+/// A triangle of a collapse's fans that stays, as the decimation's guards see it: (v, u, w) in
+/// its own turning order, the corner v moving from its end's point x to q (x is the end's, so
+/// not kept here); n0 = (u - x) x (w - x), found once for all the guards. `t` is the caller's.
+struct FanTriangle
+{
+    uint32_t t;
+    std::array<uint32_t, 3> ids;
+    Vec3d u, w, n0;
+};
+
+/// The two fans of one collapse: start() with the two triangles that go (in their own order,
+/// with their normals and the corners across the edge), then accepts() with the rest, which
+/// it reads where the caller keeps them. Vertex ids are the caller's, used only to say which
 /// triangles share a corner.
 class StepGuard
 {
@@ -31,17 +41,13 @@ public:
 
     explicit StepGuard(double bound) : mBound(bound) {}
 
-    /// A collapse of an edge to the point q.
-    void start(const Vec3d& q);
-    /// One of the two triangles that go (in its own order), and its corner across the edge.
-    void addGone(const Ids& ids, const Vec3d& x, const Vec3d& u, const Vec3d& w, uint32_t across,
-                 const Vec3d& acrossPoint);
-    void startSecondFan() { mSecond = uint32_t(mAfter.size()); }
-    /// A remaining triangle (v, u, w) in its own turning order, v moving from x to q.
-    void addMoved(const Ids& ids, const Vec3d& x, const Vec3d& u, const Vec3d& w);
-    /// Whether every sample of either fan lies within the bound of the other; a and b the
-    /// edge's ends (the first fan's and the second's).
-    bool accepts(const Vec3d& a, const Vec3d& b);
+    /// A collapse of an edge to the point q; gone[g] = (x, u, w, n = (u - x) x (w - x)) for the
+    /// two triangles that go, ids their corners, across their corners across the edge.
+    void start(const Vec3d& q, const std::array<Vec3d, 4> (&gone)[2], const Ids (&ids)[2],
+               const uint32_t (&across)[2], const Vec3d (&acrossPoints)[2]);
+    /// Whether every sample of either fan lies within the bound of the other. a and b are the
+    /// edge's ends; fan[0, second) moves a's corner, fan[second, n) b's.
+    bool accepts(const Vec3d& a, const Vec3d& b, const FanTriangle* fan, size_t n, size_t second);
 
 private:
     /// A point to find near a fan: the triangle to try first (kNone: none) and a ring vertex
@@ -53,19 +59,31 @@ private:
     };
     static constexpr uint32_t kNone = UINT32_MAX;
 
-    bool isFlat(const Vec3d& a, const Vec3d& b) const;
+    /// The moved corner's old point of fan triangle i.
+    const Vec3d& from(size_t i) const { return i < mSecond ? *mA : *mB; }
+    bool isFlat() const;
+    /// Seven collapses in ten end at isFlat, which needs only the normals and points: the
+    /// fans are set up for point questions (mOld, mAfter, the ids, the samples) only here.
+    void prepare();
     static bool nearAll(const std::vector<Sample>& samples,
                         const std::vector<NearTriangle>& triangles, const std::vector<Ids>& ids,
                         double bound2);
 
     double mBound;
     Vec3d mQ{0.0};
+    std::array<Vec3d, 4> mGone[2]{}; ///< (x, u, w, normal) of the two that go
+    Ids mGoneIds[2]{};
+    uint32_t mAcross[2] = {kNone, kNone};
+    Vec3d mAcrossPoint[2] = {Vec3d(0.0), Vec3d(0.0)};
+    const Vec3d *mA = nullptr, *mB = nullptr; ///< the ends' old points (accepts)
+    const FanTriangle* mFan = nullptr;        ///< the rest, the caller's (accepts)
+    size_t mFanSize = 0, mSecond = 0;
+
     std::vector<NearTriangle> mOld, mNew;     ///< the old fan (the two that go first), the new
     std::vector<Ids> mOldIds, mNewIds;        ///< their corners (a moved corner keeps its id)
     std::vector<std::array<Vec3d, 4>> mAfter; ///< the new fan (q, u, w), and where q's corner was;
                                               ///< mAfter[i] is mOld[i + 2] moved
     std::vector<Sample> mFar;                 ///< old points to find near the new fan
-    uint32_t mSecond = 0;                     ///< mAfter's triangles of the second fan start here
 };
 
 } // namespace post
