@@ -230,6 +230,15 @@ else
     expect_error "rasterize --device cuda without a GPU" "CUDA" "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/gpu.vdb" --device cuda
     check "no output after the CUDA error" test ! -e "$T/gpu.vdb"
 fi
+# A bad input fails in milliseconds, while the GPU's context may still be being made on a thread
+# of its own (prepareDevice): the process must end all the same, with its one error line. (An
+# exit that began during that hung for good on the H100 machine, SIGTERM notwithstanding.)
+for device in cuda auto; do
+    rc=0
+    timeout -s KILL 60 "$BIN" reconstruct "$T/missing.bgeo" -r 0.01 -o "$T/m.obj" --device $device 2>"$T/m.err" || rc=$?
+    check "reconstruct --device $device of a missing file ends, exit code 1" test "$rc" -eq 1
+    check "reconstruct --device $device of a missing file: one error line" test "$(grep -c 'fluidsurf: error:' "$T/m.err")" -eq 1
+done
 expect_error "rasterize: unknown device" "device" "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/bad.vdb" --device tpu
 if [ -f "$SHARED/real/hilbert_46843_particles.bgeo" ]; then
     check "reconstruct hilbert: valid OBJ with normals" bash -c "'$BIN' reconstruct '$SHARED/real/hilbert_46843_particles.bgeo' -r 0.025 -o '$T/hilbert.obj' -q && /usr/bin/python3 '$T/objcheck.py' '$T/hilbert.obj' >/dev/null"

@@ -5,6 +5,7 @@
 #include "ProcessMemory.h"
 
 #include <fluidsurf/Error.h>
+#include <fluidsurf/Rasterize.h>
 #include <fluidsurf/Version.h>
 
 #include <iostream>
@@ -81,27 +82,34 @@ Run 'fluidsurf COMMAND --help' for the options of a command.)");
         return e.get_exit_code() ? e.get_exit_code() : 2;
     }
     cli::installInterruptHandler();
-    try {
-        if (app.got_subcommand("info")) return info();
-        if (app.got_subcommand("convert")) return convert();
-        if (app.got_subcommand("generate")) return generate();
-        if (app.got_subcommand("rasterize")) return rasterize();
-        if (app.got_subcommand("mesh")) return mesh();
-        if (app.got_subcommand("reconstruct")) return reconstruct();
-        if (app.got_subcommand("post")) return post();
-    } catch (const fluidsurf::Cancelled&) {
-        // Ctrl-C: outputs are written through temporary files, so nothing partial is left.
-        std::cerr << "fluidsurf: interrupted; no partial output was written\n";
-        return cli::interruptExitCode();
-    } catch (const fluidsurf::Error& e) {
-        std::cerr << "fluidsurf: error: " << oneLine(e.what()) << "\n";
-        return 1;
-    } catch (const std::bad_alloc&) {
-        std::cerr << "fluidsurf: error: out of memory\n";
-        return 1;
-    } catch (const std::exception& e) {
-        std::cerr << "fluidsurf: error: " << oneLine(e.what()) << "\n";
-        return 1;
-    }
-    return 2;
+    const auto runCommand = [&]() -> int {
+        try {
+            if (app.got_subcommand("info")) return info();
+            if (app.got_subcommand("convert")) return convert();
+            if (app.got_subcommand("generate")) return generate();
+            if (app.got_subcommand("rasterize")) return rasterize();
+            if (app.got_subcommand("mesh")) return mesh();
+            if (app.got_subcommand("reconstruct")) return reconstruct();
+            if (app.got_subcommand("post")) return post();
+        } catch (const fluidsurf::Cancelled&) {
+            // Ctrl-C: outputs are written through temporary files, so nothing partial is left.
+            std::cerr << "fluidsurf: interrupted; no partial output was written\n";
+            return cli::interruptExitCode();
+        } catch (const fluidsurf::Error& e) {
+            std::cerr << "fluidsurf: error: " << oneLine(e.what()) << "\n";
+            return 1;
+        } catch (const std::bad_alloc&) {
+            std::cerr << "fluidsurf: error: out of memory\n";
+            return 1;
+        } catch (const std::exception& e) {
+            std::cerr << "fluidsurf: error: " << oneLine(e.what()) << "\n";
+            return 1;
+        }
+        return 2;
+    };
+    const int code = runCommand();
+    // Before exit's handlers run: an exit that begins while the CUDA context is being made (a
+    // bad input fails in milliseconds) can hang for good (Rasterize.h).
+    waitForDevice();
+    return code;
 }

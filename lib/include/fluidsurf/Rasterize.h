@@ -74,7 +74,15 @@ struct RasterizeResult
 /// Start looking for the GPU and creating its CUDA context (0.1-0.3 s) on a thread of its own, so
 /// that this overlaps reading the particles; a later rasterizeParticles with Device::Cuda or Auto
 /// finds it ready. Does nothing for Device::Cpu or without the CUDA backend. Never throws.
+/// A program that calls it calls waitForDevice before it ends.
 void prepareDevice(Device device);
+
+/// Waits until the look for the GPU that prepareDevice started is over (at once when none was
+/// started, or it is over). Call it before the process ends, on error paths too: a process
+/// whose exit begins while the CUDA context is still being made can hang there for good (seen
+/// on the H100 machine: `reconstruct missing.xyz --device cuda` printed its error and never
+/// ended, SIGTERM notwithstanding). Never throws.
+void waitForDevice();
 
 /// Particle radii: with params.perParticleRadii and a radius attribute (pscale), r_j comes from
 /// it; otherwise r_j = params.radius. sourceName goes into the grid metadata. Stages are timed in

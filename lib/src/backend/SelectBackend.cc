@@ -5,15 +5,38 @@
 #include <fluidsurf/Rasterize.h>
 
 #include <future>
+#include <mutex>
+#include <utility>
 
 namespace fluidsurf {
+
+namespace {
+
+/// prepareDevice's look for the GPU, waited for by waitForDevice (and, failing that, by its
+/// destructor at exit).
+std::future<void>& opening()
+{
+    static std::future<void> f;
+    return f;
+}
+
+std::once_flag openingStarted;
+
+} // namespace
 
 void prepareDevice(Device device)
 {
     if (device == Device::Cpu) return;
-    // Held until exit: the future's destructor waits for the context, never a half-made one.
-    static std::future<void> opening =
-        std::async(std::launch::async, [] { backend::cudaUsable(); });
+    std::call_once(openingStarted, [] {
+        std::future<void> f = std::async(std::launch::async, [] { backend::cudaUsable(); });
+        opening() = std::move(f);
+    });
+}
+
+void waitForDevice()
+{
+    std::future<void>& f = opening();
+    if (f.valid()) f.wait();
 }
 
 namespace backend {
