@@ -1,8 +1,8 @@
 // Normals.cc - angle-weighted vertex normals (see Normals.h).
 //
-// Each vertex gathers from its own triangles (a vertex -> triangle table built by counting),
-// rather than each triangle scattering into its vertices: no atomics, and the sum runs in the
-// same order on every run.
+// Each vertex gathers from its own triangles (a vertex -> triangle table built by counting, its
+// lists in triangle order), rather than each triangle scattering into its vertices: the sums
+// need no atomics, and each runs in the same order on every run.
 #include "post/Normals.h"
 
 #include "util/Vec3d.h"
