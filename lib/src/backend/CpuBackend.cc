@@ -58,9 +58,9 @@ public:
         Classified c = classifyOnCpu(particles, params, ctx, out);
         // only the classes go on (to the band and the field's particles): the neighbour counts
         // and colour fields (12 bytes a particle) are given back before the band's values
-        std::vector<uint32_t>().swap(c.classes.neighbours);
-        std::vector<float>().swap(c.classes.colorField);
-        std::vector<float>().swap(c.classes.colorGradient);
+        decltype(c.classes.neighbours)().swap(c.classes.neighbours);
+        decltype(c.classes.colorField)().swap(c.classes.colorField);
+        decltype(c.classes.colorGradient)().swap(c.classes.colorGradient);
         {
             const auto t = ctx.scope("narrow band");
             const openvdb::MaskTree::Ptr band =

@@ -215,10 +215,11 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
         throw ValueError("classifyParticles: 8 lanes a register need a CPU with AVX2");
     const size_t n = index.size();
     Classification out;
-    out.classes.assign(n, Interior);
-    out.neighbours.assign(n, 0);
-    out.colorField.assign(n, 0.f);
-    out.colorGradient.assign(n, 0.f);
+    // each written by the loop below, every particle's, where its cell is done
+    out.classes.resize(n);
+    out.neighbours.resize(n);
+    out.colorField.resize(n);
+    out.colorGradient.resize(n);
     if (withNormals) out.normals.assign(n, Vec3f(0, 0, 0));
     const KernelConstants k = kernelConstants(params);
     const ClassRule rule = classRule(params);

@@ -35,10 +35,11 @@ inline bool isSurface(uint8_t c)
 
 struct Classification
 {
-    std::vector<uint8_t> classes;     ///< per particle, in the index's cell order
-    std::vector<uint32_t> neighbours; ///< other particles closer than h
-    std::vector<float> colorField;    ///< cf_i as above
-    std::vector<float> colorGradient; ///< |grad cf_i| * h (MCG03's surface normal length)
+    // (not zeroed first: classifyParticles writes every particle's, on all threads)
+    util::NoInitVector<uint8_t> classes;     ///< per particle, in the index's cell order
+    util::NoInitVector<uint32_t> neighbours; ///< other particles closer than h
+    util::NoInitVector<float> colorField;    ///< cf_i as above
+    util::NoInitVector<float> colorGradient; ///< |grad cf_i| * h (MCG03's surface normal length)
     /// -grad cf_i / |grad cf_i| (outward; 0 where the gradient vanishes), for the surface and
     /// splash particles only, and only when asked for (the curvature of ch. 6); else empty
     std::vector<Vec3f> normals;
@@ -82,7 +83,7 @@ std::vector<uint8_t> notIsolated(const Classification& classes);
 void selectClasses(Classification& classes, const std::vector<uint8_t>& keep);
 
 /// v's elements that keep marks, in order, compacted in place (capacity given back).
-template <typename T> void selectInPlace(std::vector<T>& v, const std::vector<uint8_t>& keep)
+template <typename Vector> void selectInPlace(Vector& v, const std::vector<uint8_t>& keep)
 {
     if (v.empty()) return;
     size_t n = 0;

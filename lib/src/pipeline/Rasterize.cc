@@ -113,8 +113,8 @@ struct Run
         }
         // Only the classes and neighbour counts go on (to the band and the level map).
         std::vector<Vec3f>().swap(c.classes.normals);
-        std::vector<float>().swap(c.classes.colorField);
-        std::vector<float>().swap(c.classes.colorGradient);
+        decltype(c.classes.colorField)().swap(c.classes.colorField);
+        decltype(c.classes.colorGradient)().swap(c.classes.colorGradient);
         // The field's particles: the index without its isolated ones, which the band and the
         // level map pass over too. The classes and kappa follow it, and the full index goes
         // before the band is built.

@@ -7,13 +7,15 @@
 // a millisecond here.
 #pragma once
 
+#include <memory> // (first: a C++ header defines __GLIBC__ for the test below)
+#include <new>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
 #ifdef __GLIBC__
 #include <malloc.h>
 #endif
-
-#include <memory>
-#include <new>
-#include <utility>
 
 namespace fluidsurf {
 namespace util {
@@ -37,12 +39,22 @@ template <typename T> struct NoInitAllocator : std::allocator<T>
     };
     NoInitAllocator() = default;
     template <typename U> NoInitAllocator(const NoInitAllocator<U>&) noexcept {}
-    template <typename U> void construct(U* p) noexcept { ::new (static_cast<void*>(p)) U; }
+    /// Nothing at all for a plain type of bytes (Vec3f too, whose default constructor would
+    /// zero it): the code that asked for the elements writes each before it reads it.
+    template <typename U> void construct(U* p) noexcept
+    {
+        if constexpr (!(std::is_trivially_copyable_v<U> && std::is_trivially_destructible_v<U>))
+            ::new (static_cast<void*>(p)) U;
+    }
     template <typename U, typename... Args> void construct(U* p, Args&&... args)
     {
         ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
     }
 };
+
+/// A vector whose new elements are not zeroed (see NoInitAllocator): for arrays of hundreds of
+/// MB that parallel loops fill whole, which one thread would otherwise zero first.
+template <typename T> using NoInitVector = std::vector<T, NoInitAllocator<T>>;
 
 } // namespace util
 } // namespace fluidsurf
