@@ -128,7 +128,7 @@ State makeState(TriangleMesh& mesh)
 /// mesh order within each: tris[start[b], start[b + 1]) are block b's.
 struct Blocks
 {
-    std::vector<uint32_t> tris;
+    util::NoInitVector<uint32_t> tris; // (filled whole on all threads)
     std::vector<size_t> start;
 };
 
@@ -143,7 +143,7 @@ Blocks sortIntoBlocks(const State& s, double side, double shift)
     constexpr uint32_t kMask = (1u << kBits) - 1;
     constexpr size_t kChunk = size_t(1) << 16;
     const size_t chunks = (n + kChunk - 1) / kChunk;
-    std::vector<uint32_t> block(n); // each triangle's key, then its block's number
+    util::NoInitVector<uint32_t> block(n); // each triangle's key, then its block's number
     std::vector<std::vector<uint32_t>> present(chunks); // the keys in each chunk, sorted, once
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         std::vector<uint32_t>& keys = present[c];
@@ -244,22 +244,23 @@ Shares shareOut(const State& s, const Blocks& blocks, double maxError, size_t ne
                 double rankFactor)
 {
     const size_t n = s.triangles.size(), nb = blocks.start.size() - 1;
-    const std::vector<uint32_t>& tris = blocks.tris;
+    const util::NoInitVector<uint32_t>& tris = blocks.tris;
     const std::vector<size_t>& blockStart = blocks.start;
     Shares sh{maxError, true, std::vector<size_t>(nb, 0)};
     // the sampled edges' errors, by block order (3 for the i-th sampled triangle in block
     // order, the kSample * i-th): infinite for an edge left to its other triangle
-    std::vector<float> errors;
+    util::NoInitVector<float> errors; // (each written below, on all threads)
     if (!last) {
-        errors.assign(3 * ((n + kSample - 1) / kSample), std::numeric_limits<float>::infinity());
+        errors.resize(3 * ((n + kSample - 1) / kSample));
         tbb::parallel_for(tbb::blocked_range<size_t>(0, errors.size() / 3),
                           [&](const tbb::blocked_range<size_t>& r) {
                               for (size_t i = r.begin(); i != r.end(); ++i)
                                   for (int k = 0; k < 3; ++k) {
                                       const Tri& t = s.triangles[tris[kSample * i]];
-                                      if (t[k] < t[(k + 1) % 3])
-                                          errors[3 * i + k] =
-                                              float(bestCollapse(s, t[k], t[(k + 1) % 3]).error);
+                                      errors[3 * i + k] =
+                                          t[k] < t[(k + 1) % 3]
+                                              ? float(bestCollapse(s, t[k], t[(k + 1) % 3]).error)
+                                              : std::numeric_limits<float>::infinity();
                                   }
                           });
         std::vector<float> sorted;
@@ -376,7 +377,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
         if (needed == 0 || n == 0) break;
 
         const Blocks blocks = sortIntoBlocks(s, blockSide(s), pass % 2 ? 0.5 : 0.0);
-        const std::vector<uint32_t>& tris = blocks.tris;
+        const util::NoInitVector<uint32_t>& tris = blocks.tris;
         const std::vector<size_t>& blockStart = blocks.start;
         const size_t nb = blockStart.size() - 1;
         util::returnFreedMemory();
