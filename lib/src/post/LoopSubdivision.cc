@@ -6,12 +6,14 @@
 // a fixed list of inputs summed in a fixed order.
 #include "post/LoopSubdivision.h"
 
+#include "util/Incidence.h"
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace fluidsurf {
@@ -59,30 +61,41 @@ TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
     });
     tbb::parallel_sort(sides.begin(), sides.end());
 
-    // edges: [first[e], first[e + 1]) are its sides; each triangle side's edge
-    std::vector<uint32_t> first;
+    // edges: [first[e], first[e + 1]) are its sides; each triangle side's edge. Found by chunks
+    // on all threads: each counts the edges starting in it, then numbers them from where the
+    // earlier chunks' end.
+    const size_t ns = sides.size();
+    auto starts = [&](size_t i) {
+        return i == 0 || sides[i].lo != sides[i - 1].lo || sides[i].hi != sides[i - 1].hi;
+    };
+    constexpr size_t kChunk = size_t(1) << 16;
+    const size_t chunks = (ns + kChunk - 1) / kChunk;
+    std::vector<uint32_t> before(chunks + 1, 0);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        for (size_t i = c * kChunk; i < std::min(ns, (c + 1) * kChunk); ++i)
+            before[c + 1] += starts(i);
+    });
+    for (size_t c = 0; c < chunks; ++c)
+        before[c + 1] += before[c];
+    const size_t ne = before[chunks];
+    std::vector<uint32_t> first(ne + 1);
     std::vector<std::array<uint32_t, 3>> sideEdge(nt);
-    for (size_t i = 0; i < sides.size(); ++i) {
-        if (i == 0 || sides[i].lo != sides[i - 1].lo || sides[i].hi != sides[i - 1].hi)
-            first.push_back(uint32_t(i));
-        sideEdge[sides[i].tri][sides[i].k] = uint32_t(first.size() - 1);
-    }
-    const size_t ne = first.size();
-    first.push_back(uint32_t(sides.size()));
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        uint32_t e = before[c]; // the edge after the last one started before this chunk
+        for (size_t i = c * kChunk; i < std::min(ns, (c + 1) * kChunk); ++i) {
+            if (starts(i)) first[e++] = uint32_t(i);
+            sideEdge[sides[i].tri][sides[i].k] = e - 1;
+        }
+    });
+    first[ne] = uint32_t(ns);
     auto crease = [&](size_t e) { return first[e + 1] - first[e] != 2; };
 
     // each point's edges, in edge order
-    std::vector<uint32_t> start(nv + 1, 0), incident(2 * ne);
-    for (size_t e = 0; e < ne; ++e)
-        ++start[sides[first[e]].lo + 1], ++start[sides[first[e]].hi + 1];
-    for (size_t v = 0; v < nv; ++v)
-        start[v + 1] += start[v];
-    {
-        std::vector<uint32_t> fill(start.begin(), start.end() - 1);
-        for (size_t e = 0; e < ne; ++e)
-            incident[fill[sides[first[e]].lo]++] = uint32_t(e),
-            incident[fill[sides[first[e]].hi]++] = uint32_t(e);
-    }
+    std::vector<uint32_t> start, incident;
+    util::buildIncidence(
+        ne, uint32_t(nv),
+        [&](size_t e, auto&& emit) { emit(sides[first[e]].lo), emit(sides[first[e]].hi); }, start,
+        incident);
 
     TriangleMesh out;
     out.points.resize(nv + ne);

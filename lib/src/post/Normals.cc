@@ -5,6 +5,7 @@
 // need no atomics, and each runs in the same order on every run.
 #include "post/Normals.h"
 
+#include "util/Incidence.h"
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
@@ -30,41 +31,14 @@ VertexTriangles::VertexTriangles(const std::vector<std::array<uint32_t, 3>>& tri
 VertexTriangles::VertexTriangles(const std::vector<std::array<uint32_t, 3>>& triangles,
                                  uint32_t first, uint32_t last)
 {
-    // A counting sort on all threads: serial, it was the most of what did not scale in
-    // post-processing (four times over the triangles in decimation's set-up, once in each of
-    // smoothing, the volumes and the normals). The counts and the slots taken are atomic, so
-    // each vertex's triangles land in any order; sorted after, they are in triangle order, as
-    // one thread filling them in order left them.
     const uint32_t n = last - first;
-    const size_t nt = triangles.size();
-    const auto overCorners = [&](auto&& f) {
-        tbb::parallel_for(
-            tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
-                for (size_t t = r.begin(); t != r.end(); ++t)
-                    for (uint32_t v : triangles[t])
-                        if (v - first < n)
-                            f(v - first, uint32_t(t)); // (unsigned: below first wraps)
-            });
-    };
-    start.assign(size_t(n) + 1, 0);
-    overCorners(
-        [&](uint32_t v, uint32_t) { __atomic_fetch_add(&start[v + 1], 1u, __ATOMIC_RELAXED); });
-    for (size_t v = 0; v < n; ++v)
-        start[v + 1] += start[v];
-    tris.resize(start.back());
-    // each vertex's slots taken from its start, which so moves to the next one's; shifted back
-    // after
-    overCorners([&](uint32_t v, uint32_t t) {
-        tris[__atomic_fetch_add(&start[v], 1u, __ATOMIC_RELAXED)] = t;
-    });
-    std::copy_backward(start.begin(), start.end() - 1, start.end());
-    start[0] = 0;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t v = r.begin(); v != r.end(); ++v)
-            for (uint32_t i = start[v] + 1; i < start[v + 1]; ++i) // few: an insertion sort
-                for (uint32_t j = i; j > start[v] && tris[j - 1] > tris[j]; --j)
-                    std::swap(tris[j - 1], tris[j]);
-    });
+    util::buildIncidence(
+        triangles.size(), n,
+        [&](size_t t, auto&& emit) {
+            for (uint32_t v : triangles[t])
+                if (v - first < n) emit(v - first); // (unsigned: below first wraps past n)
+        },
+        start, tris);
 }
 
 void computeAngleWeightedNormals(TriangleMesh& mesh)
