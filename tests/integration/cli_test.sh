@@ -109,6 +109,17 @@ expect_error "NaN coordinates" "NaN/Inf" "$BIN" convert "$T/nan.csv" "$T/nan.ply
 check "--drop-nonfinite" bash -c "'$BIN' convert --drop-nonfinite '$T/nan.csv' '$T/nan.ply' | grep -q '1 non-finite dropped'"
 expect_error "unwritable output format" "cannot write particles" "$BIN" convert "$T/ball.bgeo" "$T/ball.csv"
 expect_error "output folder missing" "cannot write into folder" "$BIN" convert "$T/ball.bgeo" "$T/nodir/ball.ply"
+# ... found before any work, for every output of the pipeline commands and for --stats: no
+# radius estimate (its line comes as the frame is read), frame line or timing tree on stdout,
+# only the one error line
+for args in "reconstruct $T/ball.bgeo -o $T/nodir/b.obj" \
+            "reconstruct $T/ball.bgeo -o $T/b.obj --vdb $T/nodir/b.vdb" \
+            "rasterize $T/ball.bgeo -o $T/nodir/b.vdb" \
+            "reconstruct $T/ball.bgeo -r 0.01 -o $T/b2.obj --stats $T/nodir/s.json"; do
+    expect_error "${args%% *}: output folder missing ($args)" "cannot write into folder" $BIN $args -v
+    check "${args%% *}: refused before any work ($args)" bash -c "[ -z \"\$($BIN $args -v 2>/dev/null)\" ]"
+done
+check "no output beside a refused one" bash -c "[ ! -e '$T/b.obj' ] && [ ! -e '$T/b2.obj' ]"
 expect_error "bad frame range" "bad frame range" "$BIN" convert "$T/seq_{:04}.bgeo" "$T/q_{:04}.ply" --frames 5-2
 
 # --- rasterize -----------------------------------------------------------------------------

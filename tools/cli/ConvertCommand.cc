@@ -43,6 +43,7 @@ Runner addConvertCommand(CLI::App& app)
     return [o]() {
         const auto jobs = planFrames(o->input, o->output, o->frames);
         refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
+        refuseUnwritableOutputs(outputsOf(jobs));
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
         io::WriteOptions wo;

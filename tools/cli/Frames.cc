@@ -2,12 +2,14 @@
 #include "Frames.h"
 
 #include <fluidsurf/Error.h>
+#include <fluidsurf/io/AtomicFile.h>
 
 #include <sys/stat.h>
 
 #include <climits>
 #include <cstdlib>
 #include <map>
+#include <set>
 
 namespace fluidsurf {
 namespace cli {
@@ -83,6 +85,17 @@ void refuseOverwritingInputs(const std::vector<std::string>& inputs,
         if (!other.second)
             throw ValueError("outputs '" + other.first->second + "' and '" + out +
                              "' are the same file");
+    }
+}
+
+void refuseUnwritableOutputs(const std::vector<std::string>& outputs)
+{
+    std::set<std::string> folders; // once a folder: a sequence's frames share one, as a rule
+    for (const std::string& out : outputs) {
+        const size_t slash = out.find_last_of('/');
+        if (folders.insert(slash == std::string::npos ? "." : out.substr(0, slash + 1)).second ||
+            out.empty() || out.back() == '/')
+            io::requireWritableFolder(out);
     }
 }
 

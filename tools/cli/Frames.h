@@ -31,6 +31,10 @@ std::vector<FrameJob> planVdbFrames(const std::string& input, const std::string&
 void refuseOverwritingInputs(const std::vector<std::string>& inputs,
                              const std::vector<std::string>& outputs);
 
+/// OutputError, before any work, when an output's folder is missing or not writable (the
+/// error its writing would end with, minutes of computing later).
+void refuseUnwritableOutputs(const std::vector<std::string>& outputs);
+
 /// The inputs and outputs of frame jobs, for refuseOverwritingInputs.
 std::vector<std::string> inputsOf(const std::vector<FrameJob>& jobs);
 std::vector<std::string> outputsOf(const std::vector<FrameJob>& jobs);

@@ -120,6 +120,7 @@ int runMeshFrames(const MeshOptions& o, const char* name, const ReadInput& read,
     const PipelineOptions& po = o.pipeline;
     const auto jobs = planMeshJobs(o);
     refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
+    refuseUnwritableOutputs(outputsOf(jobs));
     Context ctx;
     const auto threadLimit = po.setUp(ctx);
     const std::vector<size_t> picked = shardOf(jobs, o.sequence.shard);
@@ -369,6 +370,7 @@ Runner addReconstructCommand(CLI::App& app)
         std::vector<std::string> outputs = outputsOf(jobs), vdbOutputs = outputsOf(vdbJobs);
         outputs.insert(outputs.end(), vdbOutputs.begin(), vdbOutputs.end());
         refuseOverwritingInputs(inputsOf(jobs), outputs);
+        refuseUnwritableOutputs(outputs);
         ReconstructParams params = po.resolved();
         params.keepGrids = !vdbJobs.empty(); // without --vdb it goes before post-processing
         const std::vector<std::string> gridAttributes =

@@ -186,6 +186,8 @@ void PipelineOptions::configure(Context& ctx) const
 
 std::unique_ptr<tbb::global_control> PipelineOptions::setUp(Context& ctx) const
 {
+    // --stats is written last, after every frame: its folder is checked before the first
+    if (!stats.empty()) io::requireWritableFolder(stats);
     configure(ctx);
     if (threads <= 0) return nullptr;
     return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

@@ -60,6 +60,7 @@ Runner addRasterizeCommand(CLI::App& app)
         const PipelineOptions& po = o->pipeline;
         const auto jobs = planVdbFrames(o->input, o->output, o->frames, "output");
         refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
+        refuseUnwritableOutputs(outputsOf(jobs));
         ReconstructParams params = po.resolved();
         Context ctx;
         const auto threadLimit = po.setUp(ctx);

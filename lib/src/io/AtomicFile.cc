@@ -57,13 +57,18 @@ void removeStaleTemporaries(const std::string& folder)
 }
 } // namespace
 
-AtomicFile::AtomicFile(const std::string& target) : mTarget(target)
+void requireWritableFolder(const std::string& target)
 {
     if (target.empty()) throw OutputError("empty output path");
     if (target.back() == '/') throw OutputError(target + ": output path names a folder");
     if (::access(folderOf(target).c_str(), W_OK) != 0)
         throw OutputError(target + ": cannot write into folder '" + folderOf(target) +
                           "': " + std::strerror(errno));
+}
+
+AtomicFile::AtomicFile(const std::string& target) : mTarget(target)
+{
+    requireWritableFolder(target);
     static std::atomic<unsigned> counter{0};
     // Hidden name in the same folder: rename() stays atomic (same file system).
     const size_t slash = target.find_last_of('/');

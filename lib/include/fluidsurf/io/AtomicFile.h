@@ -31,6 +31,11 @@ private:
     bool mCommitted = false;
 };
 
+/// OutputError unless an AtomicFile for target could be made: a path that names a file, in a
+/// folder that exists and this process may write into. For front ends that check every output
+/// before the work, so that a typo in a folder name costs no minutes of computing first.
+void requireWritableFolder(const std::string& target);
+
 /// Write bytes to path atomically; OutputError on failure.
 void writeFileAtomic(const std::string& path, const void* data, size_t size);
 
