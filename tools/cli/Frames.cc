@@ -90,12 +90,12 @@ void refuseOverwritingInputs(const std::vector<std::string>& inputs,
 
 void refuseUnwritableOutputs(const std::vector<std::string>& outputs)
 {
-    std::set<std::string> folders; // once a folder: a sequence's frames share one, as a rule
+    std::set<std::string> folders; // each once: a sequence's frames share one, as a rule
     for (const std::string& out : outputs) {
         const size_t slash = out.find_last_of('/');
-        if (folders.insert(slash == std::string::npos ? "." : out.substr(0, slash + 1)).second ||
-            out.empty() || out.back() == '/')
-            io::requireWritableFolder(out);
+        const std::string folder = slash == std::string::npos ? "." : out.substr(0, slash + 1);
+        const bool notAFile = out.empty() || out.back() == '/'; // refused whatever the folder
+        if (notAFile || folders.insert(folder).second) io::requireWritableFolder(out);
     }
 }
 

@@ -1,6 +1,7 @@
 // CellIndex.cc - Morton keys, parallel radix sort, cell ranges.
 #include "neighbors/CellIndex.h"
 
+#include "util/MarkedNumbers.h"
 #include "util/Memory.h"
 #include "util/RadixSort.h"
 
@@ -126,24 +127,13 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
                               if (radii) index.radii[i] = radii[src];
                           }
                       });
-    // the occupied cells: where the key changes, counted per chunk, then written from where
-    // the earlier chunks' cells end
-    constexpr size_t kChunk = size_t(1) << 16;
-    const size_t chunks = (n + kChunk - 1) / kChunk;
-    std::vector<size_t> firstCell(chunks + 1, 0);
-    auto isFirst = [&](size_t i) { return i == 0 || handles[i].key != handles[i - 1].key; };
-    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-        for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
-            firstCell[c + 1] += isFirst(i);
-    });
-    for (size_t c = 0; c < chunks; ++c)
-        firstCell[c + 1] += firstCell[c];
-    index.keys.resize(firstCell[chunks]);
-    index.starts.resize(firstCell[chunks] + 1);
-    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-        size_t cell = firstCell[c];
-        for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
-            if (isFirst(i)) index.keys[cell] = handles[i].key, index.starts[cell++] = uint32_t(i);
+    // the occupied cells: where the key changes, numbered in order on all threads
+    const util::MarkedNumbers cells(
+        n, [&](size_t i) { return i == 0 || handles[i].key != handles[i - 1].key; });
+    index.keys.resize(cells.count());
+    index.starts.resize(cells.count() + 1);
+    cells.forEach([&](size_t i, bool first, size_t k) {
+        if (first) index.keys[k - 1] = handles[i].key, index.starts[k - 1] = uint32_t(i);
     });
     index.starts.back() = uint32_t(n);
     index.buildLookup();

@@ -337,13 +337,13 @@ private:
     };
 
     Vec3d& point(uint32_t v) { return mS.points[mGlobal[v]]; }
+    const Vec3d& point(uint32_t v) const { return mS.points[mGlobal[v]]; }
 
     /// bestCollapse of the local edge (a, b), from the block's unpacked quadrics.
     Collapse bestCollapse(uint32_t a, uint32_t b) const
     {
         return detail::bestCollapse(mQuadric[a], point(a), mQuadric[b], point(b));
     }
-    const Vec3d& point(uint32_t v) const { return mS.points[mGlobal[v]]; }
 
     void aliveTris(uint32_t v, std::vector<uint32_t>& out) const
     {

@@ -7,13 +7,13 @@
 #include "post/LoopSubdivision.h"
 
 #include "util/Incidence.h"
+#include "util/MarkedNumbers.h"
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
-#include <algorithm>
 #include <cmath>
 
 namespace fluidsurf {
@@ -61,31 +61,17 @@ TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
     });
     tbb::parallel_sort(sides.begin(), sides.end());
 
-    // edges: [first[e], first[e + 1]) are its sides; each triangle side's edge. Found by chunks
-    // on all threads: each counts the edges starting in it, then numbers them from where the
-    // earlier chunks' end.
+    // edges: [first[e], first[e + 1]) are its sides; each triangle side's edge
     const size_t ns = sides.size();
-    auto starts = [&](size_t i) {
+    const util::MarkedNumbers edges(ns, [&](size_t i) {
         return i == 0 || sides[i].lo != sides[i - 1].lo || sides[i].hi != sides[i - 1].hi;
-    };
-    constexpr size_t kChunk = size_t(1) << 16;
-    const size_t chunks = (ns + kChunk - 1) / kChunk;
-    std::vector<uint32_t> before(chunks + 1, 0);
-    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-        for (size_t i = c * kChunk; i < std::min(ns, (c + 1) * kChunk); ++i)
-            before[c + 1] += starts(i);
     });
-    for (size_t c = 0; c < chunks; ++c)
-        before[c + 1] += before[c];
-    const size_t ne = before[chunks];
+    const size_t ne = edges.count();
     std::vector<uint32_t> first(ne + 1);
     std::vector<std::array<uint32_t, 3>> sideEdge(nt);
-    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-        uint32_t e = before[c]; // the edge after the last one started before this chunk
-        for (size_t i = c * kChunk; i < std::min(ns, (c + 1) * kChunk); ++i) {
-            if (starts(i)) first[e++] = uint32_t(i);
-            sideEdge[sides[i].tri][sides[i].k] = e - 1;
-        }
+    edges.forEach([&](size_t i, bool starts, size_t e) { // e: edges up to this side's, its own
+        if (starts) first[e - 1] = uint32_t(i);
+        sideEdge[sides[i].tri][sides[i].k] = uint32_t(e - 1);
     });
     first[ne] = uint32_t(ns);
     auto crease = [&](size_t e) { return first[e + 1] - first[e] != 2; };

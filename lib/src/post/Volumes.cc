@@ -8,6 +8,7 @@
 
 #include "post/Normals.h"
 
+#include "util/MarkedNumbers.h"
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
@@ -114,27 +115,17 @@ Components findComponents(const TriangleMesh& mesh)
     });
     Components c;
     c.ofPoint.assign(nv, kNoComponent);
-    // roots numbered in point order: counts per chunk, then each chunk from its offset
-    constexpr size_t kPoints = size_t(1) << 16;
-    const size_t chunks = (nv + kPoints - 1) / kPoints;
-    std::vector<uint32_t> before(chunks + 1, 0);
-    tbb::parallel_for(size_t(0), chunks, [&](size_t k) {
-        for (size_t v = k * kPoints; v < std::min(nv, (k + 1) * kPoints); ++v)
-            before[k + 1] += used[v] && parent[v] == v;
-    });
-    for (size_t k = 0; k < chunks; ++k)
-        before[k + 1] += before[k];
-    tbb::parallel_for(size_t(0), chunks, [&](size_t k) {
-        uint32_t next = before[k];
-        for (size_t v = k * kPoints; v < std::min(nv, (k + 1) * kPoints); ++v)
-            if (used[v] && parent[v] == v) c.ofPoint[v] = next++;
+    // the roots numbered in point order
+    const util::MarkedNumbers roots(nv, [&](size_t v) { return used[v] && parent[v] == v; });
+    roots.forEach([&](size_t v, bool isRoot, size_t k) {
+        if (isRoot) c.ofPoint[v] = uint32_t(k - 1);
     });
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v)
             if (used[v] && parent[v] != v)
                 c.ofPoint[v] = c.ofPoint[root(parent.data(), uint32_t(v))];
     });
-    sums(mesh, c.ofPoint, before[chunks], c.volume, nullptr);
+    sums(mesh, c.ofPoint, roots.count(), c.volume, nullptr);
     return c;
 }
 
