@@ -254,14 +254,28 @@ Shares shareOut(const State& s, const Blocks& blocks, double maxError, size_t ne
         errors.resize(3 * ((n + kSample - 1) / kSample));
         tbb::parallel_for(tbb::blocked_range<size_t>(0, errors.size() / 3),
                           [&](const tbb::blocked_range<size_t>& r) {
+                              CollapseBatch batch;
+                              size_t at[CollapseBatch::kSize]; // each lane's place in errors
+                              int n = 0;
+                              auto flush = [&] {
+                                  double e[CollapseBatch::kSize];
+                                  batch.errors(n, e);
+                                  for (int l = 0; l < n; ++l)
+                                      errors[at[l]] = float(e[l]);
+                                  n = 0;
+                              };
                               for (size_t i = r.begin(); i != r.end(); ++i)
                                   for (int k = 0; k < 3; ++k) {
                                       const Tri& t = s.triangles[tris[kSample * i]];
-                                      errors[3 * i + k] =
-                                          t[k] < t[(k + 1) % 3]
-                                              ? float(bestCollapse(s, t[k], t[(k + 1) % 3]).error)
-                                              : std::numeric_limits<float>::infinity();
+                                      const uint32_t a = t[k], b = t[(k + 1) % 3];
+                                      errors[3 * i + k] = std::numeric_limits<float>::infinity();
+                                      if (a > b) continue;
+                                      batch.set(n, s.quadrics[a].unpack(), s.points[a],
+                                                s.quadrics[b].unpack(), s.points[b]);
+                                      at[n++] = 3 * i + k;
+                                      if (n == CollapseBatch::kSize) flush();
                                   }
+                              if (n > 0) flush();
                           });
         std::vector<float> sorted;
         sorted.reserve(3 * n / 2 / kSample);

@@ -25,6 +25,7 @@
 // same order, as with every edge in the heap.
 #pragma once
 
+#include "post/CollapseBatch.h"
 #include "post/Decimate.h"
 #include "post/Quadric.h"
 #include "post/StepGuard.h"
@@ -79,32 +80,12 @@ struct State
     std::vector<uint8_t> refused;
 };
 
-struct Collapse
-{
-    Vec3d point;
-    double error; ///< area-weighted mean squared distance to the planes
-};
-
 /// The planes of two vertices (their quadrics qa and qb, each about its own point), their
 /// origin moved to `to`.
 inline Quadric mergedQuadric(const Quadric& qa, const Vec3d& pa, const Quadric& qb, const Vec3d& pb,
                              const Vec3d& to)
 {
     return qa.movedTo(to - pa) + qb.movedTo(to - pb);
-}
-
-inline Collapse bestCollapse(const Quadric& qa, const Vec3d& pa, const Quadric& qb, const Vec3d& pb)
-{
-    const Vec3d middle = (pa + pb) * 0.5;
-    const Quadric q = mergedQuadric(qa, pa, qb, pb, middle);
-    const Vec3d x = q.minimizer(Vec3d(0.0)); // from the middle
-    return {middle + x, q.w > 0 ? q.error(x) / q.w : 0.0};
-}
-
-/// The collapse of the state's edge (a, b).
-inline Collapse bestCollapse(const State& s, uint32_t a, uint32_t b)
-{
-    return bestCollapse(s.quadrics[a].unpack(), s.points[a], s.quadrics[b].unpack(), s.points[b]);
 }
 
 struct BlockResult
@@ -153,11 +134,13 @@ private:
     size_t mMask = 0;
 };
 
-/// A binary min-heap of T by T::rank() (distinct entries have distinct ranks, so the pops come
+/// A 4-ary min-heap of T by T::rank() (distinct entries have distinct ranks, so the pops come
 /// in one order whatever the heap's layout). Why not std::priority_queue: its sift-down chooses
 /// each level's child with a branch that goes either way at random; here the choice is a select
-/// and the pop sifts its hole to a leaf first (Floyd), a third fewer compares. Block's heap was
-/// an eighth of the decimation's time.
+/// and the pop sifts its hole to a leaf first (Floyd), a third fewer compares. Four children a
+/// node: half the levels of a binary heap, for three compares a level; two thirds of the pops
+/// are of stale entries, where the pop is all the work. Block's heap was an eighth of the
+/// decimation's time.
 template <typename T> class RankHeap
 {
 public:
@@ -165,8 +148,8 @@ public:
     void assign(std::vector<T>&& items)
     {
         mItems = std::move(items);
-        for (size_t i = mItems.size() / 2; i-- > 0;)
-            siftDown(i, mItems[i]);
+        for (size_t i = mItems.size() / kArity + 1; i-- > 0;)
+            if (kArity * i + 1 < mItems.size()) siftDown(i, mItems[i]);
     }
     bool empty() const { return mItems.empty(); }
     const T& top() const { return mItems.front(); }
@@ -184,24 +167,33 @@ public:
     }
 
 private:
-    /// x into the hole at i, which moves to a leaf along the smaller children and then up.
+    static constexpr size_t kArity = 4;
+
+    /// x into the hole at i, which moves to a leaf along the smallest children and then up.
     void siftDown(size_t i, const T x)
     {
         const size_t n = mItems.size(), start = i;
-        while (2 * i + 2 < n) {
-            size_t c = 2 * i + 1;
-            c += mItems[c + 1].rank() < mItems[c].rank();
-            mItems[i] = mItems[c];
-            i = c;
+        for (size_t c = kArity * i + 1; c + kArity <= n; c = kArity * i + 1) {
+            const size_t low = c + (mItems[c + 1].rank() < mItems[c].rank()),
+                         high = c + 2 + (mItems[c + 3].rank() < mItems[c + 2].rank());
+            const size_t m = mItems[high].rank() < mItems[low].rank() ? high : low;
+            mItems[i] = mItems[m];
+            i = m;
         }
-        if (2 * i + 1 < n) mItems[i] = mItems[2 * i + 1], i = 2 * i + 1;
+        if (const size_t c = kArity * i + 1; c < n) { // the last node with children: 1 to 3
+            size_t m = c;
+            for (size_t k = c + 1; k < n; ++k)
+                m = mItems[k].rank() < mItems[m].rank() ? k : m;
+            mItems[i] = mItems[m];
+            i = m;
+        }
         siftUp(start, i, x);
     }
     /// x into the hole at i, moving up while its parent ranks after it (not above `top`).
     void siftUp(size_t top, size_t i, const T& x)
     {
         while (i > top) {
-            const size_t parent = (i - 1) / 2;
+            const size_t parent = (i - 1) / kArity;
             if (!(x.rank() < mItems[parent].rank())) break;
             mItems[i] = mItems[parent];
             i = parent;
@@ -254,6 +246,11 @@ public:
             mOwn[v] = mCount[v] == valence[mGlobal[v]] && isClosedFan(uint32_t(v));
         mVersion.assign(nv, 0);
         mMark.assign(nv, 0);
+        mMayRefuse.assign(nv, 0);
+        for (size_t t = 0; t < n; ++t)
+            for (int k = 0; k < 3; ++k)
+                if (mRefused[t] >> k & 1)
+                    mMayRefuse[mTris[t][k]] = mMayRefuse[mTris[t][(k + 1) % 3]] = 1;
         mQuadric.resize(nv);
         for (size_t v = 0; v < nv; ++v)
             mQuadric[v] = s.quadrics[mGlobal[v]].unpack();
@@ -266,10 +263,14 @@ public:
         mStep = StepGuard(mMaxStep);
         std::vector<Entry> entries; // made a heap at once: cheaper than pushing one by one
         entries.reserve(3 * mTris.size() / 2);
+        mEdges.clear();
         for (size_t t = 0; t < mTris.size(); ++t)
-            for (int k = 0; k < 3; ++k) // each inner edge once, from its lower end
-                if (mTris[t][k] < mTris[t][(k + 1) % 3] && !(mRefused[t] >> k & 1))
-                    push(mTris[t][k], mTris[t][(k + 1) % 3], &entries);
+            for (int k = 0; k < 3; ++k) { // each inner edge once, from its lower end
+                const uint32_t a = mTris[t][k], b = mTris[t][(k + 1) % 3];
+                if (a < b && !(mRefused[t] >> k & 1) && mOwn[a] && mOwn[b])
+                    mEdges.push_back({a, b});
+            }
+        pushEdges(&entries);
         mHeap.assign(std::move(entries));
         mPopped = false;
         while (!mHeap.empty() && out.collapses < budget) {
@@ -377,24 +378,44 @@ private:
         return true;
     }
 
+    /// The heap entry of edge (a, b), a < b, whose collapse has this error, if it belongs in
+    /// the heap.
+    bool entry(uint32_t a, uint32_t b, double error, Entry& e) const
+    {
+        if (!(error <= mThreshold)) return false;
+        const float key = float(error);
+        uint32_t bits;
+        std::memcpy(&bits, &key, sizeof bits);
+        e = Entry{mVersion[a] + mVersion[b], b, uint64_t(bits) << 32 | a};
+        return true;
+    }
+
     /// The heap entry of edge (a, b), if it belongs in the heap.
     bool entry(uint32_t a, uint32_t b, Entry& e) const
     {
         if (!mOwn[a] || !mOwn[b]) return false;
         if (a > b) std::swap(a, b);
-        const Collapse c = bestCollapse(a, b);
-        if (!(c.error <= mThreshold)) return false;
-        const float error = float(c.error);
-        uint32_t bits;
-        std::memcpy(&bits, &error, sizeof bits);
-        e = Entry{mVersion[a] + mVersion[b], b, uint64_t(bits) << 32 | a};
-        return true;
+        return entry(a, b, bestCollapse(a, b).error, e);
     }
 
-    void push(uint32_t a, uint32_t b, std::vector<Entry>* entries = nullptr)
+    /// The edges in mEdges (owned ends, the lower first) that belong in the heap, into
+    /// `entries` (else the heap), their errors found a batch at a time.
+    void pushEdges(std::vector<Entry>* entries = nullptr)
     {
-        Entry e;
-        if (entry(a, b, e)) entries ? entries->push_back(e) : mHeap.push(e);
+        for (size_t i = 0; i < mEdges.size(); i += CollapseBatch::kSize) {
+            const int n = int(std::min<size_t>(CollapseBatch::kSize, mEdges.size() - i));
+            for (int l = 0; l < n; ++l) {
+                const auto [a, b] = mEdges[i + l];
+                mBatch.set(l, mQuadric[a], point(a), mQuadric[b], point(b));
+            }
+            double errors[CollapseBatch::kSize];
+            mBatch.errors(n, errors);
+            for (int l = 0; l < n; ++l) {
+                Entry e;
+                if (entry(mEdges[i + l].first, mEdges[i + l].second, errors[l], e))
+                    entries ? entries->push_back(e) : mHeap.push(e);
+            }
+        }
     }
 
     /// e comes after every entry popped so far (the heap's order: the top is the largest).
@@ -403,6 +424,7 @@ private:
     /// Remembers the refusal of edge (a, b) on both its triangles.
     Outcome refuse(uint32_t a, uint32_t b, const uint32_t (&shared)[2])
     {
+        mMayRefuse[a] = mMayRefuse[b] = 1;
         for (uint32_t t : shared)
             for (int k = 0; k < 3; ++k) {
                 const uint32_t p = mTris[t][k], q = mTris[t][(k + 1) % 3];
@@ -420,6 +442,8 @@ private:
             touched.push_back(mGlobal[u]);
             return;
         }
+        if (!mMayRefuse[u]) return; // nothing remembered at u (most ring vertices)
+        mMayRefuse[u] = 0;          // all of u's forgotten below
         const uint32_t stamp = ++mStamp;
         for (uint32_t i = mStart[u]; i < mStart[u] + mCount[u]; ++i) {
             const uint32_t t = mRefs[i];
@@ -556,13 +580,18 @@ private:
         aliveTris(a, mTa);
         const uint32_t mark = ++mStamp;
         mRing.clear();
+        mEdges.clear();
         for (uint32_t t : mTa) {
             for (uint32_t w : mTris[t])
-                if (w != a && mMark[w] != mark) mMark[w] = mark, mRing.push_back(w), push(a, w);
+                if (w != a && mMark[w] != mark) {
+                    mMark[w] = mark, mRing.push_back(w);
+                    if (mOwn[w]) mEdges.push_back({std::min(a, w), std::max(a, w)});
+                }
             for (int k = 0; k < 3; ++k) // a's own edges are all in the heap again
                 if (mTris[t][k] == a || mTris[t][(k + 1) % 3] == a)
                     mRefused[t] &= uint8_t(~(1 << k));
         }
+        pushEdges();
         return Outcome::Collapsed;
     }
 
@@ -575,6 +604,8 @@ private:
     std::vector<uint32_t> mStart, mCount, mRefs; ///< vertex -> its triangles (lists grow at
                                                  ///< the end of mRefs as vertices merge)
     std::vector<uint32_t> mVersion;              ///< bumped when a vertex moves or goes
+    /// per vertex: it may have an edge remembered as refused (0: it has none; touch skips it)
+    std::vector<uint8_t> mMayRefuse;
     /// State::quadrics unpacked, per local vertex: each edge's error reads two, and unpacking
     /// them was a seventh of the quadric work (only owned vertices change, here and in State).
     std::vector<Quadric> mQuadric;
@@ -588,8 +619,10 @@ private:
     /// b's from mSecondFan.
     std::vector<FanTriangle> mFan;
     size_t mSecondFan = 0;
-    std::vector<uint32_t> mRing; ///< the last collapse's vertex' neighbours
-    Entry mLast{};               ///< the last entry popped in heap order (see touch)
+    std::vector<uint32_t> mRing;                       ///< the last collapse's vertex' neighbours
+    std::vector<std::pair<uint32_t, uint32_t>> mEdges; ///< edges for pushEdges
+    CollapseBatch mBatch;
+    Entry mLast{}; ///< the last entry popped in heap order (see touch)
     bool mPopped = false;
 };
 

@@ -8,20 +8,29 @@
 namespace fluidsurf {
 namespace post {
 
-struct Quadric
+/// Always inlined: a batch of edges (post/CollapseBatch) runs these on vectors in code compiled
+/// for AVX2, which only an inlined body takes on.
+#define FLUIDSURF_QUADRIC_INLINE __attribute__((always_inline)) inline
+
+/// T: double, or a vector of doubles (util::Doubles, util::WideDoubles) for several quadrics at
+/// once, lane by lane. Each lane then goes through the same operations in the same order as a
+/// double alone, and there is no FMA in either (the build targets no CPU that has it), so a
+/// lane's bits are the double's. Branches are selects for the same reason: `c ? x : y` takes a
+/// vector of lane masks as well as a bool.
+template <typename T> struct BasicQuadric
 {
     // No initialisers: an array of a million is filled in parallel without being zeroed first
     // (Quadric{} is the empty set of planes).
-    double a00, a01, a02, a11, a12, a22; ///< sum of w n n^T
-    double b0, b1, b2;                   ///< sum of w d n
-    double c;                            ///< sum of w d^2
-    double w;                            ///< sum of w (the area)
+    T a00, a01, a02, a11, a12, a22; ///< sum of w n n^T
+    T b0, b1, b2;                   ///< sum of w d n
+    T c;                            ///< sum of w d^2
+    T w;                            ///< sum of w (the area)
 
     /// The plane through p with unit normal n, weighted by w (a triangle's area).
-    static Quadric plane(const Vec3d& n, const Vec3d& p, double w)
+    static BasicQuadric plane(const Vec3d& n, const Vec3d& p, double w)
     {
         const double d = -n.dot(p);
-        Quadric q{};
+        BasicQuadric q{};
         q.a00 = w * n[0] * n[0], q.a01 = w * n[0] * n[1], q.a02 = w * n[0] * n[2];
         q.a11 = w * n[1] * n[1], q.a12 = w * n[1] * n[2], q.a22 = w * n[2] * n[2];
         q.b0 = w * d * n[0], q.b1 = w * d * n[1], q.b2 = w * d * n[2];
@@ -29,56 +38,70 @@ struct Quadric
         return q;
     }
 
-    Quadric& operator+=(const Quadric& o)
+    FLUIDSURF_QUADRIC_INLINE BasicQuadric& operator+=(const BasicQuadric& o)
     {
         a00 += o.a00, a01 += o.a01, a02 += o.a02, a11 += o.a11, a12 += o.a12, a22 += o.a22;
         b0 += o.b0, b1 += o.b1, b2 += o.b2, c += o.c, w += o.w;
         return *this;
     }
-    Quadric operator+(const Quadric& o) const { return Quadric(*this) += o; }
+    FLUIDSURF_QUADRIC_INLINE BasicQuadric operator+(const BasicQuadric& o) const
+    {
+        return BasicQuadric(*this) += o;
+    }
 
     /// The same planes with the origin moved to d: the quadric of x -> (this)(x + d).
-    Quadric movedTo(const Vec3d& d) const
+    FLUIDSURF_QUADRIC_INLINE BasicQuadric movedTo(T d0, T d1, T d2) const
     {
-        Quadric q = *this; // A stays; b becomes A d + b, c the error at d
-        q.b0 = a00 * d[0] + a01 * d[1] + a02 * d[2] + b0;
-        q.b1 = a01 * d[0] + a11 * d[1] + a12 * d[2] + b1;
-        q.b2 = a02 * d[0] + a12 * d[1] + a22 * d[2] + b2;
-        q.c = error(d);
+        BasicQuadric q = *this; // A stays; b becomes A d + b, c the error at d
+        q.b0 = a00 * d0 + a01 * d1 + a02 * d2 + b0;
+        q.b1 = a01 * d0 + a11 * d1 + a12 * d2 + b1;
+        q.b2 = a02 * d0 + a12 * d1 + a22 * d2 + b2;
+        q.c = error(d0, d1, d2);
         return q;
     }
+    BasicQuadric movedTo(const Vec3d& d) const { return movedTo(d[0], d[1], d[2]); }
 
-    /// Weighted sum of squared distances from p to the planes.
-    double error(const Vec3d& p) const
+    /// Weighted sum of squared distances from (x, y, z) to the planes.
+    FLUIDSURF_QUADRIC_INLINE T error(T x, T y, T z) const
     {
-        const double x = p[0], y = p[1], z = p[2];
-        const double e = x * (a00 * x + 2 * a01 * y + 2 * a02 * z) + y * (a11 * y + 2 * a12 * z) +
-                         a22 * z * z + 2 * (b0 * x + b1 * y + b2 * z) + c;
-        return e > 0 ? e : 0; // rounding can take a zero error below 0
+        const T e = x * (a00 * x + 2 * a01 * y + 2 * a02 * z) + y * (a11 * y + 2 * a12 * z) +
+                    a22 * z * z + 2 * (b0 * x + b1 * y + b2 * z) + c;
+        return e > 0 ? e : T{}; // rounding can take a zero error below 0
     }
+    double error(const Vec3d& p) const { return error(p[0], p[1], p[2]); }
 
-    /// The point of least error, pulled towards `rest` along the directions the planes leave
-    /// free: on a flat patch every point of the plane has the same error, and the plain minimum
-    /// is then undefined (a singular matrix) or, with a little noise, far away along the plane.
-    /// The pull, 1e-3 of the planes' weight, decides only such directions.
+    /// The point of least error (into x), pulled towards `rest` along the directions the planes
+    /// leave free: on a flat patch every point of the plane has the same error, and the plain
+    /// minimum is then undefined (a singular matrix) or, with a little noise, far away along
+    /// the plane. The pull, 1e-3 of the planes' weight, decides only such directions.
+    FLUIDSURF_QUADRIC_INLINE void minimizer(const T (&rest)[3], T (&x)[3]) const
+    {
+        const T eps = 1e-3 * (a00 + a11 + a22);
+        const T m00 = a00 + eps, m11 = a11 + eps, m22 = a22 + eps;
+        const T r0 = eps * rest[0] - b0, r1 = eps * rest[1] - b1, r2 = eps * rest[2] - b2;
+        // Cramer's rule on the symmetric positive definite matrix
+        const T c00 = m11 * m22 - a12 * a12, c01 = a02 * a12 - a01 * m22,
+                c02 = a01 * a12 - a02 * m11;
+        const T det = m00 * c00 + a01 * c01 + a02 * c02;
+        const T c11 = m00 * m22 - a02 * a02, c12 = a01 * a02 - m00 * a12,
+                c22 = m00 * m11 - a01 * a01;
+        const T inv = 1 / det; // one division: the decimation's hottest line
+        // (no planes, or a matrix no better than singular: the rest point)
+        const auto solved = (eps > 0) & (det > 0);
+        x[0] = solved ? (c00 * r0 + c01 * r1 + c02 * r2) * inv : rest[0];
+        x[1] = solved ? (c01 * r0 + c11 * r1 + c12 * r2) * inv : rest[1];
+        x[2] = solved ? (c02 * r0 + c12 * r1 + c22 * r2) * inv : rest[2];
+    }
     Vec3d minimizer(const Vec3d& rest) const
     {
-        const double eps = 1e-3 * (a00 + a11 + a22);
-        if (!(eps > 0)) return rest;
-        const double m00 = a00 + eps, m11 = a11 + eps, m22 = a22 + eps;
-        const double r0 = eps * rest[0] - b0, r1 = eps * rest[1] - b1, r2 = eps * rest[2] - b2;
-        // Cramer's rule on the symmetric positive definite matrix
-        const double c00 = m11 * m22 - a12 * a12, c01 = a02 * a12 - a01 * m22,
-                     c02 = a01 * a12 - a02 * m11;
-        const double det = m00 * c00 + a01 * c01 + a02 * c02;
-        if (!(det > 0)) return rest;
-        const double c11 = m00 * m22 - a02 * a02, c12 = a01 * a02 - m00 * a12,
-                     c22 = m00 * m11 - a01 * a01;
-        const double inv = 1 / det; // one division: the decimation's hottest line
-        return Vec3d((c00 * r0 + c01 * r1 + c02 * r2) * inv, (c01 * r0 + c11 * r1 + c12 * r2) * inv,
-                     (c02 * r0 + c12 * r1 + c22 * r2) * inv);
+        const double r[3] = {rest[0], rest[1], rest[2]};
+        double x[3];
+        minimizer(r, x);
+        return Vec3d(x[0], x[1], x[2]);
     }
 };
+
+using Quadric = BasicQuadric<double>;
 
 /// A quadric kept in 44 bytes instead of 88, for one a vertex: floats, per unit of weight
 /// (means of n n^T, d n and d^2, so that no scene's scale leaves float's range) and relative

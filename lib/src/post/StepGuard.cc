@@ -1,10 +1,9 @@
 // StepGuard.cc - how far one collapse moves the surface (see StepGuard.h).
 //
 // A flat fan is let through without a point tested (isFlat), from the normals the caller has
-// found already and the fans where the caller keeps them; only otherwise are the fans copied and
-// set up once (NearTriangle) for the dozens of questions the collapse asks, and each point is
-// tried first against the triangle it came from and those by its ring vertex, where it lies as
-// a rule.
+// found already and the fans where the caller keeps them. Only otherwise are the fans'
+// triangles set up (NearTriangle), each as the questions reach it, and each point is tried
+// first against the triangle it came from and those by its ring vertex, where it lies as a rule.
 #include "post/StepGuard.h"
 
 #include <algorithm>
@@ -24,11 +23,15 @@ void StepGuard::start(const Vec3d& q, const std::array<Vec3d, 4> (&gone)[2], con
 
 void StepGuard::prepare()
 {
-    mOld.clear(), mOldIds.clear(), mAfter.clear(), mNewIds.clear(), mFar.clear();
+    mFar.clear();
+    for (int f = 0; f < 2; ++f) { // nothing set up yet
+        const size_t n = size(Fan(f));
+        mReady[f].assign(n, 0);
+        std::vector<NearTriangle>& t = f == 0 ? mOld : mNew;
+        if (t.size() < n) t.resize(n);
+    }
     for (int g = 0; g < 2; ++g) {
         const auto& [x, u, w, n] = mGone[g];
-        mOld.emplace_back(x, u, w);
-        mOldIds.push_back(mGoneIds[g]);
         // the old triangle's middle, standing for the surface it covered: near the same
         // triangle moved when that moved it less than the bound; a segment has none
         const Vec3d middle = (x + u + w) / 3.0;
@@ -40,11 +43,29 @@ void StepGuard::prepare()
         const Vec3d& x = from(i);
         if ((mQ - x).length() > 3 * mBound) // its middle moved a third of that
             mFar.push_back({(x + f.u + f.w) / 3.0, uint32_t(i), f.ids[1]});
-        mOld.emplace_back(x, f.u, f.w);
-        mOldIds.push_back(f.ids);
-        mAfter.push_back({mQ, f.u, f.w, x});
-        mNewIds.push_back(f.ids); // v's id stands for q's: only the others are asked
     }
+}
+
+const StepGuard::Ids& StepGuard::ids(Fan f, size_t i) const
+{
+    if (f == Fan::Old) return i < 2 ? mGoneIds[i] : mFan[i - 2].ids;
+    return mFan[i].ids; // v's id stands for q's: only the others are asked
+}
+
+const NearTriangle& StepGuard::triangle(Fan f, size_t i)
+{
+    const bool old = f == Fan::Old;
+    NearTriangle& t = (old ? mOld : mNew)[i];
+    if (!mReady[old ? 0 : 1][i]) {
+        mReady[old ? 0 : 1][i] = 1;
+        if (!old)
+            t = NearTriangle(mQ, mFan[i].u, mFan[i].w);
+        else if (i < 2)
+            t = NearTriangle(mGone[i][0], mGone[i][1], mGone[i][2]);
+        else
+            t = NearTriangle(from(i - 2), mFan[i - 2].u, mFan[i - 2].w);
+    }
+    return t;
 }
 
 bool StepGuard::accepts(const Vec3d& a, const Vec3d& b, const FanTriangle* fan, size_t n,
@@ -62,21 +83,18 @@ bool StepGuard::accepts(const Vec3d& a, const Vec3d& b, const FanTriangle* fan, 
             nearOld = true;
         else
             mFar.push_back({*ends[e], e == 0 ? 0u : uint32_t(mSecond), kNone}); // its fan first
-    for (size_t i = 0; i < mOld.size() && !nearOld; ++i)
-        nearOld = mOld[i].within(p, bound2);
+    for (size_t i = 0; i < size(Fan::Old) && !nearOld; ++i)
+        nearOld = triangle(Fan::Old, i).within(p, bound2);
     if (!nearOld) return false;
-    mNew.clear();
-    for (const auto& t : mAfter)
-        mNew.emplace_back(t[0], t[1], t[2]);
-    if (!nearAll(mFar, mNew, mNewIds, bound2)) return false;
+    if (!nearAll(mFar, Fan::New, bound2)) return false;
     // and the new surface near the old between the points too: the middles of the new edges
     // out of p (Loop's edge points sit there later). Each is near the old edge it came from
     // when the moving corner moved less than twice the bound.
     mFar.clear();
-    for (size_t i = 0; i < mAfter.size(); ++i) // (p, u, w, where p's corner was)
-        if ((p - mAfter[i][3]).length() > 2 * mBound)
-            mFar.push_back({(p + mAfter[i][1]) * 0.5, uint32_t(i + 2), mNewIds[i][1]});
-    return nearAll(mFar, mOld, mOldIds, bound2);
+    for (size_t i = 0; i < mFanSize; ++i) // (p, u, w), p's corner from from(i)
+        if ((p - from(i)).length() > 2 * mBound)
+            mFar.push_back({(p + mFan[i].u) * 0.5, uint32_t(i + 2), mFan[i].ids[1]});
+    return nearAll(mFar, Fan::Old, bound2);
 }
 
 /// Whether the collapse moves a flat fan within itself, so that no point need be tested (seven
@@ -123,24 +141,22 @@ bool StepGuard::isFlat() const
     return crossings == 1;
 }
 
-/// Each sample within the bound of one of the triangles (ids: their corners).
-bool StepGuard::nearAll(const std::vector<Sample>& samples,
-                        const std::vector<NearTriangle>& triangles, const std::vector<Ids>& ids,
-                        double bound2)
+/// Each sample within the bound of one of fan f's triangles.
+bool StepGuard::nearAll(const std::vector<Sample>& samples, Fan f, double bound2)
 {
-    const size_t n = triangles.size();
+    const size_t n = size(f);
     for (const Sample& s : samples) {
         auto byHint = [&](size_t i) {
-            return s.hint != kNone &&
-                   (ids[i][0] == s.hint || ids[i][1] == s.hint || ids[i][2] == s.hint);
+            const Ids& c = ids(f, i);
+            return s.hint != kNone && (c[0] == s.hint || c[1] == s.hint || c[2] == s.hint);
         };
         const size_t own = s.own == kNone ? n : s.own;
-        bool near = own < n && triangles[own].within(s.q, bound2);
+        bool near = own < n && triangle(f, own).within(s.q, bound2);
         for (size_t i = 0; i < n && !near; ++i)
-            near = i != own && byHint(i) && triangles[i].within(s.q, bound2);
+            near = i != own && byHint(i) && triangle(f, i).within(s.q, bound2);
         for (size_t j = 0; j < n && !near; ++j) { // from the own one on, round
             const size_t i = own < n ? (own + 1 + j) % n : j;
-            near = i != own && !byHint(i) && triangles[i].within(s.q, bound2);
+            near = i != own && !byHint(i) && triangle(f, i).within(s.q, bound2);
         }
         if (!near) return false;
     }

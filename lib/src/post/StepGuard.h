@@ -63,11 +63,20 @@ private:
     const Vec3d& from(size_t i) const { return i < mSecond ? *mA : *mB; }
     bool isFlat() const;
     /// Seven collapses in ten end at isFlat, which needs only the normals and points: the
-    /// fans are set up for point questions (mOld, mAfter, the ids, the samples) only here.
+    /// samples are found only here.
     void prepare();
-    static bool nearAll(const std::vector<Sample>& samples,
-                        const std::vector<NearTriangle>& triangles, const std::vector<Ids>& ids,
-                        double bound2);
+
+    /// The two fans, as nearAll asks them: the old one (the two that go first, then the
+    /// caller's fan where it was) and the new one (the caller's fan with q for its moved
+    /// corner). A triangle is set up for point questions (NearTriangle) when first asked: a
+    /// sample is found by its own triangle or a neighbour of it as a rule, and most of a fan
+    /// is never asked.
+    enum class Fan { Old, New };
+    size_t size(Fan f) const { return f == Fan::Old ? mFanSize + 2 : mFanSize; }
+    /// Corners' ids (a moved corner keeps its id in the new fan).
+    const Ids& ids(Fan f, size_t i) const;
+    const NearTriangle& triangle(Fan f, size_t i);
+    bool nearAll(const std::vector<Sample>& samples, Fan f, double bound2);
 
     double mBound;
     Vec3d mQ{0.0};
@@ -79,11 +88,11 @@ private:
     const FanTriangle* mFan = nullptr;        ///< the rest, the caller's (accepts)
     size_t mFanSize = 0, mSecond = 0;
 
-    std::vector<NearTriangle> mOld, mNew;     ///< the old fan (the two that go first), the new
-    std::vector<Ids> mOldIds, mNewIds;        ///< their corners (a moved corner keeps its id)
-    std::vector<std::array<Vec3d, 4>> mAfter; ///< the new fan (q, u, w), and where q's corner was;
-                                              ///< mAfter[i] is mOld[i + 2] moved
-    std::vector<Sample> mFar;                 ///< old points to find near the new fan
+    /// The fans' triangles as set up so far (`mReady`: which), by the indices above; the
+    /// arrays only grow (NearTriangle's construction is the work put off).
+    std::vector<NearTriangle> mOld, mNew;
+    std::vector<uint8_t> mReady[2];
+    std::vector<Sample> mFar; ///< points to find near a fan
 };
 
 } // namespace post

@@ -1,7 +1,7 @@
-// Lanes.h - a few floats processed as one value, through the GCC/Clang vector extensions:
-// explicit SIMD on any x86-64 (SSE2 baseline) without intrinsics. The hot loops of classify and
-// field accumulate per lane and add the lanes in a fixed order at the end, so results do not
-// depend on how work is split between threads.
+// Lanes.h - a few floats (or doubles) processed as one value, through the GCC/Clang vector
+// extensions: explicit SIMD on any x86-64 (SSE2 baseline) without intrinsics. The hot loops of
+// classify and field accumulate per lane and add the lanes in a fixed order at the end, so results
+// do not depend on how work is split between threads.
 #pragma once
 
 #include <cstring>
@@ -23,6 +23,11 @@ inline Lanes loadLanes(const float* p)
 /// at run time): without AVX the compiler splits each operation in two.
 constexpr int kWideLanes = 8;
 typedef float WideLanes __attribute__((vector_size(kWideLanes * sizeof(float))));
+
+/// Doubles the same way (decimation's quadrics): two in an SSE register, four in an AVX one
+/// (for code compiled for AVX2 alone, as above).
+typedef double Doubles __attribute__((vector_size(2 * sizeof(double))));
+typedef double WideDoubles __attribute__((vector_size(4 * sizeof(double))));
 
 } // namespace util
 } // namespace fluidsurf
