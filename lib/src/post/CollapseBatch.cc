@@ -22,14 +22,15 @@ template <typename V>
 FLUIDSURF_QUADRIC_INLINE void errorsOf(const CollapseBatch& b, int first, double* out)
 {
     constexpr int kFields = CollapseBatch::kFields;
+    const CollapseBatch::Lanes& in = b.lanes();
     V qa[kFields], qb[kFields], pa[3], pb[3];
     for (int k = 0; k < kFields; ++k) {
-        std::memcpy(&qa[k], &b.mQa[k][first], sizeof(V));
-        std::memcpy(&qb[k], &b.mQb[k][first], sizeof(V));
+        std::memcpy(&qa[k], &in.qa[k][first], sizeof(V));
+        std::memcpy(&qb[k], &in.qb[k][first], sizeof(V));
     }
     for (int k = 0; k < 3; ++k) {
-        std::memcpy(&pa[k], &b.mPa[k][first], sizeof(V));
-        std::memcpy(&pb[k], &b.mPb[k][first], sizeof(V));
+        std::memcpy(&pa[k], &in.pa[k][first], sizeof(V));
+        std::memcpy(&pb[k], &in.pb[k][first], sizeof(V));
     }
     const BasicQuadric<V> a{qa[0], qa[1], qa[2], qa[3], qa[4], qa[5],
                             qa[6], qa[7], qa[8], qa[9], qa[10]};

@@ -7,6 +7,7 @@
 #include "post/Quadric.h"
 
 #include <cstdint>
+#include <cstring>
 
 namespace fluidsurf {
 namespace post {
@@ -55,12 +56,13 @@ public:
     void set(int i, const Quadric& qa, const Vec3d& pa, const Quadric& qb, const Vec3d& pb)
     {
         static_assert(sizeof(Quadric) == kFields * sizeof(double), "a quadric: 11 doubles");
-        const double* a = &qa.a00;
-        const double* b = &qb.a00;
+        double a[kFields], b[kFields]; // (its fields in order: a00 ... w)
+        std::memcpy(a, &qa, sizeof a);
+        std::memcpy(b, &qb, sizeof b);
         for (int k = 0; k < kFields; ++k)
-            mQa[k][i] = a[k], mQb[k][i] = b[k];
+            mLanes.qa[k][i] = a[k], mLanes.qb[k][i] = b[k];
         for (int k = 0; k < 3; ++k)
-            mPa[k][i] = pa[k], mPb[k][i] = pb[k];
+            mLanes.pa[k][i] = pa[k], mLanes.pb[k][i] = pb[k];
     }
     /// The doubles a register holds where the CPU has AVX2 (4), else 2 (SSE).
     static int registerLanes();
@@ -68,10 +70,17 @@ public:
     /// registerLanes() is 4 (tests run both); ValueError otherwise.
     void errors(int n, double* out, int lanes = registerLanes()) const;
 
-    static constexpr int kFields = 11;
+    static constexpr int kFields = 11; ///< a quadric's doubles
+    /// The lanes as set, field by field: what errors() loads into vectors.
+    struct Lanes
+    {
+        double qa[kFields][kSize], qb[kFields][kSize], pa[3][kSize], pb[3][kSize];
+    };
+    const Lanes& lanes() const { return mLanes; }
+
+private:
     // (zeroed once: lanes past n compute on whatever an earlier batch left, never undefined)
-    alignas(32) double mQa[kFields][kSize]{}, mQb[kFields][kSize]{}, mPa[3][kSize]{},
-        mPb[3][kSize]{};
+    alignas(32) Lanes mLanes{};
 };
 
 } // namespace detail

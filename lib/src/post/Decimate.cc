@@ -33,7 +33,9 @@
 #include "post/DecimateBlock.h"
 #include "post/Normals.h"
 
+#include "util/MarkedNumbers.h"
 #include "util/Memory.h"
+#include "util/NthSmallest.h"
 #include "util/TriangleDistance.h"
 
 #include <tbb/blocked_range.h>
@@ -277,14 +279,13 @@ Shares shareOut(const State& s, const Blocks& blocks, double maxError, size_t ne
                                   }
                               if (n > 0) flush();
                           });
-        std::vector<float> sorted;
-        sorted.reserve(3 * n / 2 / kSample);
-        for (float e : errors)
-            if (e <= maxError && std::isfinite(e)) sorted.push_back(e);
         const double rank = rankFactor * double(needed) / kSample;
-        if (rank < double(sorted.size())) {
-            std::nth_element(sorted.begin(), sorted.begin() + size_t(rank), sorted.end());
-            sh.threshold = std::min(sh.threshold, double(sorted[size_t(rank)]));
+        float kth = 0; // (the errors are >= +0: Quadric::error and bestCollapse never give -0)
+        if (rank < double(errors.size()) &&
+            util::nthSmallest(
+                errors.data(), errors.size(),
+                [&](float e) { return e <= maxError && std::isfinite(e); }, size_t(rank), kth)) {
+            sh.threshold = std::min(sh.threshold, double(kth));
             sh.allEdges = false;
         }
     }
@@ -336,16 +337,21 @@ TriangleMesh compact(State&& s, std::vector<uint32_t>* kept)
     std::vector<uint8_t>().swap(s.refused);
     util::returnFreedMemory();
     TriangleMesh out;
-    std::vector<uint32_t> index(s.points.size(), UINT32_MAX);
-    const size_t nt = s.triangles.size();
+    const size_t nv = s.points.size(), nt = s.triangles.size();
+    util::NoInitVector<uint32_t> index(nv); // (all on all threads, the numbering too)
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
+        std::fill(index.begin() + r.begin(), index.begin() + r.end(), UINT32_MAX);
+    });
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t)
             for (uint32_t v : s.triangles[t]) // a mark: any order, any repeat
                 __atomic_store_n(&index[v], 0u, __ATOMIC_RELAXED);
     });
-    uint32_t used = 0;
-    for (uint32_t& i : index)
-        if (i == 0) i = used++;
+    const util::MarkedNumbers numbers(nv, [&](size_t v) { return index[v] == 0; });
+    numbers.forEach([&](size_t v, bool used, size_t k) {
+        if (used) index[v] = uint32_t(k - 1);
+    });
+    const size_t used = numbers.count();
     out.points.resize(used);
     if (kept) kept->resize(used);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, index.size()),
