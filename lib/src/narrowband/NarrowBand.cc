@@ -1,6 +1,9 @@
 // NarrowBand.cc - band topology from the surface particles.
 #include "narrowband/NarrowBand.h"
 
+#include "util/LeafWords.h"
+#include "util/MarkedNumbers.h"
+
 #include <fluidsurf/Error.h>
 #include <fluidsurf/ParticleSet.h>
 
@@ -53,11 +56,20 @@ struct BandBuilder
                 lo[a] = int(std::ceil((p[a] - width) * invDx - 1e-6));
                 hi[a] = int(std::floor((p[a] + width) * invDx + 1e-6));
             }
-            openvdb::Coord ijk;
-            for (ijk[0] = lo[0]; ijk[0] <= hi[0]; ++ijk[0])
-                for (ijk[1] = lo[1]; ijk[1] <= hi[1]; ++ijk[1])
-                    for (ijk[2] = lo[2]; ijk[2] <= hi[2]; ++ijk[2])
-                        acc.setValueOn(ijk);
+            if (lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]) continue; // (no leaf made)
+            // leaf by leaf (at most 2 an axis), a word of y and z bits an x (util/LeafWords.h):
+            // a seed's box is about 5 x 5 x 5 voxels, set voxel by voxel a tenth of the frame's
+            // work on 16 cores
+            for (int lx = lo[0] & ~7; lx <= hi[0]; lx += 8)
+                for (int ly = lo[1] & ~7; ly <= hi[1]; ly += 8)
+                    for (int lz = lo[2] & ~7; lz <= hi[2]; lz += 8) {
+                        const uint64_t word =
+                            util::boxWord(std::max(lo[1], ly) - ly, std::min(hi[1], ly + 7) - ly,
+                                          std::max(lo[2], lz) - lz, std::min(hi[2], lz + 7) - lz);
+                        auto& mask = acc.touchLeaf(openvdb::Coord(lx, ly, lz))->getValueMask();
+                        for (int x = std::max(lo[0], lx); x <= std::min(hi[0], lx + 7); ++x)
+                            mask.template getWord<uint64_t>(x - lx) |= word;
+                    }
         }
     }
     void join(BandBuilder& other) { tree->topologyUnion(*other.tree); }
@@ -69,11 +81,15 @@ openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
                                        const Params& params, const Level& level, double width,
                                        Context& ctx)
 {
-    std::vector<uint32_t> seeds;
-    for (size_t i = 0; i < classes.classes.size(); ++i)
-        if (classify::isSurface(classes.classes[i]) ||
-            (params.keepIsolated && classes.classes[i] == classify::Isolated))
-            seeds.push_back(uint32_t(i));
+    // the seeds in index order, listed on all threads (13.1M classes: 0.015 s on one)
+    const util::MarkedNumbers marked(classes.classes.size(), [&](size_t i) {
+        const uint8_t c = classes.classes[i];
+        return classify::isSurface(c) || (params.keepIsolated && c == classify::Isolated);
+    });
+    std::vector<uint32_t> seeds(marked.count());
+    marked.forEach([&](size_t i, bool seed, size_t k) {
+        if (seed) seeds[k - 1] = uint32_t(i);
+    });
     BandBuilder builder(particles, seeds, width, 1 / level.voxelSize, ctx);
     tbb::parallel_reduce(tbb::blocked_range<size_t>(0, seeds.size(), 256), builder);
     return builder.tree;
