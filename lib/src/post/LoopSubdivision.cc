@@ -1,18 +1,19 @@
 // LoopSubdivision.cc - one Loop subdivision step (see LoopSubdivision.h).
 //
-// Edges are found by sorting every triangle side by (lower end, upper end, triangle): the keys
-// are unique, so a parallel sort gives one order on every run, and each group of equal ends is
-// one edge with its one, two or more triangles. Points are then computed in parallel, each from
-// a fixed list of inputs summed in a fixed order.
+// Edges are found by sorting every triangle side by (lower end, upper end, triangle): a stable
+// radix sort by the ends of the sides made in triangle order gives one order on every run, and
+// each group of equal ends is one edge with its one, two or more triangles. Points are then
+// computed in parallel, each from a fixed list of inputs summed in a fixed order.
 #include "post/LoopSubdivision.h"
 
 #include "util/Incidence.h"
 #include "util/MarkedNumbers.h"
+#include "util/Memory.h"
+#include "util/RadixSort.h"
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include <cmath>
 
@@ -21,14 +22,11 @@ namespace post {
 
 namespace {
 
+/// A triangle's side, its ends in order; sides are sorted by (lo, hi, tri).
 struct Side
 {
     uint32_t lo, hi, tri;
     uint8_t k; ///< the side runs from corner k to corner k + 1 of its triangle
-    bool operator<(const Side& o) const
-    {
-        return lo != o.lo ? lo < o.lo : hi != o.hi ? hi < o.hi : tri < o.tri;
-    }
 };
 
 /// `to`, or the point maxMove from `from` on the way there.
@@ -51,7 +49,7 @@ double beta(size_t n)
 TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
 {
     const size_t nv = in.points.size(), nt = in.triangles.size();
-    std::vector<Side> sides(3 * nt);
+    util::NoInitVector<Side> sides(3 * nt); // (each written below)
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t)
             for (uint8_t k = 0; k < 3; ++k) {
@@ -59,7 +57,13 @@ TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
                 sides[3 * t + k] = {std::min(a, b), std::max(a, b), uint32_t(t), k};
             }
     });
-    tbb::parallel_sort(sides.begin(), sides.end());
+    // by (lo, hi), stably: the sides were made in (triangle, k) order, so equal ends keep
+    // triangle order (the comparison sort on all three it replaces gave the same order)
+    int bits = 1;
+    while (bits < 32 && (uint64_t(1) << bits) < nv)
+        ++bits;
+    util::radixSortStable(sides, 2 * bits,
+                          [&](const Side& e) { return uint64_t(e.lo) << bits | e.hi; });
 
     // edges: [first[e], first[e + 1]) are its sides; each triangle side's edge
     const size_t ns = sides.size();
@@ -67,8 +71,8 @@ TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
         return i == 0 || sides[i].lo != sides[i - 1].lo || sides[i].hi != sides[i - 1].hi;
     });
     const size_t ne = edges.count();
-    std::vector<uint32_t> first(ne + 1);
-    std::vector<std::array<uint32_t, 3>> sideEdge(nt);
+    util::NoInitVector<uint32_t> first(ne + 1); // (each written below)
+    util::NoInitVector<std::array<uint32_t, 3>> sideEdge(nt);
     edges.forEach([&](size_t i, bool starts, size_t e) { // e: edges up to this side's, its own
         if (starts) first[e - 1] = uint32_t(i);
         sideEdge[sides[i].tri][sides[i].k] = uint32_t(e - 1);
