@@ -50,7 +50,7 @@ void computeAngleWeightedNormals(TriangleMesh& mesh, const VertexTriangles& arou
 {
     const size_t nv = mesh.points.size();
     const std::vector<uint32_t>&start = around.start, &corner = around.tris;
-    mesh.normals.assign(nv, Vec3f(0, 0, 0));
+    mesh.normals.resize(nv); // (each written below: not filled by one thread first)
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
             const Vec3d p = toVec3d(mesh.points[v]);
@@ -66,14 +66,14 @@ void computeAngleWeightedNormals(TriangleMesh& mesh, const VertexTriangles& arou
                 sum += n * (std::atan2(len, a.dot(b)) / len);
             }
             const double len = sum.length();
-            if (len > 0)
-                mesh.normals[v] =
-                    Vec3f(float(sum[0] / len), float(sum[1] / len), float(sum[2] / len));
+            mesh.normals[v] =
+                len > 0 ? Vec3f(float(sum[0] / len), float(sum[1] / len), float(sum[2] / len))
+                        : Vec3f(0, 0, 0);
         }
     });
 }
 
-void AreaNormals::compute(const std::vector<Vec3d>& p)
+void AreaNormals::compute(const Vec3d* p)
 {
     const auto& tris = mMesh.triangles;
     mCross.resize(tris.size());
@@ -82,16 +82,16 @@ void AreaNormals::compute(const std::vector<Vec3d>& p)
                           for (size_t t = r.begin(); t != r.end(); ++t)
                               mCross[t] = sideCross(p, tris[t]);
                       });
-    mNormals.resize(p.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, p.size()),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t v = r.begin(); v != r.end(); ++v) {
-                              Vec3d n(0.0);
-                              for (uint32_t i = mAround.start[v]; i < mAround.start[v + 1]; ++i)
-                                  n += mCross[mAround.tris[i]];
-                              mNormals[v] = n;
-                          }
-                      });
+    const size_t nv = mMesh.points.size();
+    mNormals.resize(nv);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t v = r.begin(); v != r.end(); ++v) {
+            Vec3d n(0.0);
+            for (uint32_t i = mAround.start[v]; i < mAround.start[v + 1]; ++i)
+                n += mCross[mAround.tris[i]];
+            mNormals[v] = n;
+        }
+    });
 }
 
 } // namespace post

@@ -8,6 +8,7 @@
 
 #include <fluidsurf/Mesh.h>
 
+#include "util/Memory.h"
 #include "util/Vec3d.h"
 
 #include <cstdint>
@@ -70,13 +71,13 @@ public:
     {
     }
     /// normals()[v] for points p (one per mesh point)
-    void compute(const std::vector<Vec3d>& p);
-    const std::vector<Vec3d>& normals() const { return mNormals; }
+    void compute(const Vec3d* p);
+    const util::NoInitVector<Vec3d>& normals() const { return mNormals; }
 
 private:
     const TriangleMesh& mMesh;
     const VertexTriangles& mAround;
-    std::vector<Vec3d> mCross, mNormals;
+    util::NoInitVector<Vec3d> mCross, mNormals; ///< (each written whole by compute)
 };
 
 } // namespace post

@@ -142,7 +142,7 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
     }
     if (params.smooth > 0) {
         const auto t = ctx.scope("smooth");
-        mesh = post::smoothAlongNormals(mesh, params.smooth, kSmoothMove * voxel);
+        mesh = post::smoothAlongNormals(std::move(mesh), params.smooth, kSmoothMove * voxel);
         ctx.throwIfCancelled();
     }
     for (int step = 0; step < params.subdivide; ++step) {

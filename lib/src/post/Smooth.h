@@ -13,8 +13,9 @@ namespace post {
 /// each step moving a point along its normal by that fraction of its offset from its
 /// neighbours' mean; every point stays within maxMove (world units) of where it started.
 /// Points on an open border, on a non-manifold edge or unused do not move. Topology unchanged;
-/// no normals (Normals.h says why). The same bits for any thread count.
-TriangleMesh smoothAlongNormals(const TriangleMesh& mesh, int iterations, double maxMove);
+/// no normals (Normals.h says why). The same bits for any thread count. mesh by value: its
+/// arrays become the result's (move a mesh in to spare the copy).
+TriangleMesh smoothAlongNormals(TriangleMesh mesh, int iterations, double maxMove);
 
 } // namespace post
 } // namespace fluidsurf
