@@ -81,7 +81,7 @@ TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
     auto crease = [&](size_t e) { return first[e + 1] - first[e] != 2; };
 
     // each point's edges, in edge order
-    std::vector<uint32_t> start, incident;
+    util::NoInitVector<uint32_t> start, incident;
     util::buildIncidence(
         ne, uint32_t(nv),
         [&](size_t e, auto&& emit) { emit(sides[first[e]].lo), emit(sides[first[e]].hi); }, start,

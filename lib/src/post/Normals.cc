@@ -49,7 +49,7 @@ void computeAngleWeightedNormals(TriangleMesh& mesh)
 void computeAngleWeightedNormals(TriangleMesh& mesh, const VertexTriangles& around)
 {
     const size_t nv = mesh.points.size();
-    const std::vector<uint32_t>&start = around.start, &corner = around.tris;
+    const auto &start = around.start, &corner = around.tris;
     mesh.normals.resize(nv); // (each written below: not filled by one thread first)
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {

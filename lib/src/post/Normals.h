@@ -21,8 +21,8 @@ namespace post {
 /// over triangles gather from, in the same order on every run.
 struct VertexTriangles
 {
-    std::vector<uint32_t> start; ///< vertex v's triangles are tris[start[v], start[v + 1])
-    std::vector<uint32_t> tris;
+    /// vertex v's triangles are tris[start[v], start[v + 1]) (not zeroed first: filled whole)
+    util::NoInitVector<uint32_t> start, tris;
     explicit VertexTriangles(const TriangleMesh& mesh);
     /// The same for `points` vertices (a mesh whose points live elsewhere).
     VertexTriangles(const std::vector<std::array<uint32_t, 3>>& triangles, size_t points);

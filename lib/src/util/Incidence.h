@@ -6,6 +6,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -18,9 +19,10 @@ namespace util {
 /// where key k's items are list[start[k], start[k + 1]) in ascending order, the table one
 /// thread would make by walking the items in order. The counts and the slots taken are atomic,
 /// so the lists fill in any order; each is sorted after (few items a key: insertion sort).
-template <typename KeysOf>
-void buildIncidence(size_t items, uint32_t keys, KeysOf keysOf, std::vector<uint32_t>& start,
-                    std::vector<uint32_t>& list)
+/// Vector: a vector of uint32_t (util::NoInitVector: the list is not zeroed by one thread
+/// before the threads fill it; the counts are zeroed on all threads).
+template <typename KeysOf, typename Vector>
+void buildIncidence(size_t items, uint32_t keys, KeysOf keysOf, Vector& start, Vector& list)
 {
     const auto overItems = [&](auto&& f) {
         tbb::parallel_for(tbb::blocked_range<size_t>(0, items),
@@ -29,7 +31,11 @@ void buildIncidence(size_t items, uint32_t keys, KeysOf keysOf, std::vector<uint
                                   keysOf(i, [&](uint32_t key) { f(key, uint32_t(i)); });
                           });
     };
-    start.assign(size_t(keys) + 1, 0);
+    start.resize(size_t(keys) + 1);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, start.size()),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          std::fill(start.begin() + r.begin(), start.begin() + r.end(), 0u);
+                      });
     overItems(
         [&](uint32_t k, uint32_t) { __atomic_fetch_add(&start[k + 1], 1u, __ATOMIC_RELAXED); });
     for (size_t k = 0; k < keys; ++k)
