@@ -8,6 +8,7 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/ParticleSet.h>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -142,24 +143,75 @@ CellIndex buildCellIndex(const Vec3f* positions, const float* radii, size_t n, d
 
 void keepParticles(CellIndex& index, const std::vector<uint8_t>& keep)
 {
-    // kept particles and cells move down: each is written at or before where it is read
+    // Kept particles move down, in place (no second index). On all threads: each fixed chunk of
+    // particles moves its kept ones down within its own range, in order (each written at or
+    // before where it is read); those whose place lies in an earlier chunk's range wait, and
+    // are written once every chunk has read its own (serially, 0.05 s for the 13.1M drop's 5
+    // isolated particles). A chunk's waiting ones are at most the particles dropped before it,
+    // so where many are dropped early, one thread moves them all instead.
     const bool radii = !index.radii.empty();
-    size_t n = 0, cells = 0;
-    for (size_t c = 0; c < index.keys.size(); ++c) {
-        const size_t before = n;
-        for (uint32_t i = index.starts[c]; i < index.starts[c + 1]; ++i) {
-            if (!keep[i]) continue;
-            index.positions[n] = index.positions[i];
-            index.order[n] = index.order[i];
-            if (radii) index.radii[n] = index.radii[i];
-            ++n;
-        }
-        if (n > before) index.keys[cells] = index.keys[c], index.starts[cells++] = uint32_t(before);
+    const size_t n = index.size();
+    const util::MarkedNumbers kept(n, [&](size_t i) { return keep[i] != 0; });
+    const size_t dropped = n - kept.count();
+    if (dropped == 0) return; // as it is
+    struct Moved
+    {
+        size_t to;
+        Vec3f position;
+        uint32_t order;
+        float radius;
+    };
+    auto move = [&](size_t from, size_t to) {
+        index.positions[to] = index.positions[from];
+        index.order[to] = index.order[from];
+        if (radii) index.radii[to] = index.radii[from];
+    };
+    if (kept.chunks() * dropped <= n / 16) {
+        std::vector<std::vector<Moved>> waiting(kept.chunks());
+        kept.forEachChunk([&](size_t c, size_t begin, size_t end, size_t before) {
+            size_t to = before;
+            for (size_t i = begin; i < end; ++i) {
+                if (!keep[i]) continue;
+                if (to >= begin)
+                    move(i, to);
+                else
+                    waiting[c].push_back(
+                        {to, index.positions[i], index.order[i], radii ? index.radii[i] : 0.f});
+                ++to;
+            }
+        });
+        tbb::parallel_for(size_t(0), waiting.size(), [&](size_t c) {
+            for (const Moved& m : waiting[c]) {
+                index.positions[m.to] = m.position, index.order[m.to] = m.order;
+                if (radii) index.radii[m.to] = m.radius;
+            }
+        });
+    } else {
+        size_t to = 0;
+        for (size_t i = 0; i < n; ++i)
+            if (keep[i]) move(i, to++);
     }
-    index.positions.resize(n), index.order.resize(n);
-    if (radii) index.radii.resize(n);
+    // the cells: each starts where its first kept particle went; empty ones go (their kept
+    // particles counted on all threads, the cells, an eighth as many, moved by one)
+    util::NoInitVector<uint32_t> here(index.keys.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, here.size()),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t c = r.begin(); c != r.end(); ++c) {
+                              uint32_t k = 0;
+                              for (uint32_t i = index.starts[c]; i < index.starts[c + 1]; ++i)
+                                  k += keep[i] != 0;
+                              here[c] = k;
+                          }
+                      });
+    size_t at = 0, cells = 0; // kept particles before cell c
+    for (size_t c = 0; c < index.keys.size(); ++c) {
+        if (here[c] > 0) index.keys[cells] = index.keys[c], index.starts[cells++] = uint32_t(at);
+        at += here[c];
+    }
+    index.positions.resize(kept.count()), index.order.resize(kept.count());
+    if (radii) index.radii.resize(kept.count());
     index.keys.resize(cells), index.starts.resize(cells);
-    index.starts.push_back(uint32_t(n));
+    index.starts.push_back(uint32_t(kept.count()));
     index.buildLookup();
 }
 

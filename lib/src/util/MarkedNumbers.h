@@ -46,6 +46,17 @@ public:
         });
     }
 
+    /// f(chunk, begin, end, before) for every chunk [begin, end) of the positions, in
+    /// parallel: `before` marked positions come before it (its first marked one is number
+    /// `before`).
+    template <typename F> void forEachChunk(F&& f) const
+    {
+        tbb::parallel_for(size_t(0), mBefore.size() - 1, [&](size_t c) {
+            f(c, c * kChunk, std::min(mN, (c + 1) * kChunk), mBefore[c]);
+        });
+    }
+    size_t chunks() const { return mBefore.size() - 1; }
+
 private:
     static constexpr size_t kChunk = size_t(1) << 16;
     size_t mN;

@@ -130,3 +130,70 @@ TEST(CellIndex, ManyCellsAcrossChunksAreAllFoundAndNoOthers)
                 }
     EXPECT_GT(empty, 10000u); // the lookup was asked about cells it must not find
 }
+
+TEST(CellIndex, KeepParticlesGivesWhatOneThreadMovingThemDownGives)
+{
+    // reference: the kept particles copied out in order, the cells with any kept particle, each
+    // starting at the count kept before it; several chunks of particles (65,536 a chunk), few
+    // dropped (the parallel moves with their waiting ones) and many (one thread)
+    std::vector<Vec3f> points(300000);
+    std::vector<float> radii(points.size());
+    uint64_t seed = 5;
+    auto next = [&] {
+        return float((seed = seed * 6364136223846793005ull + 1) >> 40) / 16777216.f;
+    };
+    for (size_t i = 0; i < points.size(); ++i)
+        points[i] = Vec3f(next(), next(), next()), radii[i] = 0.001f + 0.001f * next();
+    Context ctx;
+    const CellIndex full = buildCellIndex(points.data(), radii.data(), points.size(), 0.05, ctx);
+    const size_t n = full.size();
+    for (int pattern = 0; pattern < 5; ++pattern) {
+        std::vector<uint8_t> keep(n, 1);
+        if (pattern == 0) keep[3] = keep[70000] = keep[n - 1] = 0; // a few, early and late
+        if (pattern == 1) keep[0] = 0;                             // one
+        if (pattern == 2)                                          // a whole cell
+            for (uint32_t i = full.starts[7]; i < full.starts[8]; ++i)
+                keep[i] = 0;
+        if (pattern == 3)
+            for (size_t i = 0; i < n; i += 3)
+                keep[i] = 0; // many: one thread
+        // pattern 4: none dropped
+        std::vector<Vec3f> positions;
+        std::vector<uint32_t> order;
+        std::vector<float> r;
+        std::vector<uint64_t> keys;
+        std::vector<uint32_t> starts;
+        for (size_t c = 0; c < full.keys.size(); ++c) {
+            const size_t before = positions.size();
+            for (uint32_t i = full.starts[c]; i < full.starts[c + 1]; ++i)
+                if (keep[i])
+                    positions.push_back(full.positions[i]), order.push_back(full.order[i]),
+                        r.push_back(full.radii[i]);
+            if (positions.size() > before)
+                keys.push_back(full.keys[c]), starts.push_back(uint32_t(before));
+        }
+        starts.push_back(uint32_t(positions.size()));
+        CellIndex sub = full;
+        keepParticles(sub, keep);
+        ASSERT_EQ(sub.size(), positions.size()) << pattern;
+        EXPECT_TRUE(std::equal(
+            positions.begin(), positions.end(), sub.positions.begin(),
+            [](const Vec3f& a, const Vec3f& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }))
+            << pattern;
+        EXPECT_TRUE(std::equal(order.begin(), order.end(), sub.order.begin())) << pattern;
+        EXPECT_TRUE(std::equal(r.begin(), r.end(), sub.radii.begin())) << pattern;
+        ASSERT_EQ(sub.keys.size(), keys.size()) << pattern;
+        EXPECT_TRUE(std::equal(keys.begin(), keys.end(), sub.keys.begin())) << pattern;
+        ASSERT_EQ(sub.starts.size(), starts.size()) << pattern;
+        EXPECT_TRUE(std::equal(starts.begin(), starts.end(), sub.starts.begin())) << pattern;
+        for (size_t c = 0; c < sub.keys.size(); ++c) { // and each cell found by its key
+            const uint64_t k = sub.keys[c];
+            uint32_t xyz[3] = {0, 0, 0};
+            for (int b = 0; b < 21; ++b)
+                for (int a = 0; a < 3; ++a)
+                    xyz[a] |= uint32_t(k >> (3 * b + a) & 1) << b;
+            const CellRange found = sub.find(xyz[0], xyz[1], xyz[2]);
+            ASSERT_EQ(found.begin, sub.starts[c]) << pattern << ", cell " << c;
+        }
+    }
+}
