@@ -13,6 +13,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -157,16 +158,37 @@ void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Com
 {
     const size_t nv = mesh.points.size(), count = before.volume.size();
     ofPoint.resize(nv, kNoComponent);
-    bool missing = true; // new points: a triangle neighbour's component (one pass after Loop)
-    for (int pass = 0; pass < 8 && missing; ++pass) {
-        missing = false;
-        for (const auto& t : mesh.triangles) {
-            uint32_t label = std::min({ofPoint[t[0]], ofPoint[t[1]], ofPoint[t[2]]});
-            for (uint32_t v : t)
-                if (ofPoint[v] == kNoComponent)
-                    ofPoint[v] = label, missing |= label == kNoComponent;
-        }
-    }
+    // New points: a triangle neighbour's component, on all threads, pass after pass until no
+    // point gets one (one pass after a Loop step, one more for each further step). The steps
+    // keep each triangle within one component, so a point's component is the same whichever
+    // neighbour gives it, in whatever order.
+    uint32_t* const label = ofPoint.data();
+    auto load = [&](uint32_t v) { return __atomic_load_n(&label[v], __ATOMIC_RELAXED); };
+    const size_t nt = mesh.triangles.size();
+    for (bool more = true; more;)
+        more = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, nt), false,
+            [&](const tbb::blocked_range<size_t>& r, bool changed) {
+                for (size_t i = r.begin(); i != r.end(); ++i) {
+                    const auto& t = mesh.triangles[i];
+                    const uint32_t l = std::min({load(t[0]), load(t[1]), load(t[2])});
+                    if (l == kNoComponent) continue;
+                    for (uint32_t v : t)
+                        if (load(v) == kNoComponent)
+                            __atomic_store_n(&label[v], l, __ATOMIC_RELAXED), changed = true;
+                }
+                return changed;
+            },
+            [](bool a, bool b) { return a || b; });
+    const bool missing = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, nt), false,
+        [&](const tbb::blocked_range<size_t>& r, bool any) {
+            for (size_t i = r.begin(); i != r.end() && !any; ++i)
+                for (uint32_t v : mesh.triangles[i])
+                    any |= ofPoint[v] == kNoComponent;
+            return any;
+        },
+        [](bool a, bool b) { return a || b; });
     if (missing) { // not from those components after all: leave it
         computeAngleWeightedNormals(mesh);
         return;
