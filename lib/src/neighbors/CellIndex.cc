@@ -42,11 +42,7 @@ void CellIndex::buildLookup()
     const size_t mask = size - 1;
     tableKeys.resize(size);
     tableCells.resize(size);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, size, 1 << 16),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          std::fill(tableKeys.begin() + ptrdiff_t(r.begin()),
-                                    tableKeys.begin() + ptrdiff_t(r.end()), kEmptyKey);
-                      });
+    util::fillInParallel(tableKeys, kEmptyKey);
     // In parallel, each key claiming the first empty slot on from its own with a compare and
     // swap (as the device does): which slot a key gets then depends on the timing where keys
     // collide, but every key sits after no empty slot on its way, so find() finds the same

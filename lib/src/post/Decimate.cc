@@ -339,9 +339,7 @@ TriangleMesh compact(State&& s, std::vector<uint32_t>* kept)
     TriangleMesh out;
     const size_t nv = s.points.size(), nt = s.triangles.size();
     util::NoInitVector<uint32_t> index(nv); // (all on all threads, the numbering too)
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
-        std::fill(index.begin() + r.begin(), index.begin() + r.end(), UINT32_MAX);
-    });
+    util::fillInParallel(index, UINT32_MAX);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t)
             for (uint32_t v : s.triangles[t]) // a mark: any order, any repeat

@@ -3,6 +3,8 @@
 // Loop subdivision. Serial, these counting sorts were most of what did not scale there.
 #pragma once
 
+#include "util/Memory.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -32,10 +34,7 @@ void buildIncidence(size_t items, uint32_t keys, KeysOf keysOf, Vector& start, V
                           });
     };
     start.resize(size_t(keys) + 1);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, start.size()),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          std::fill(start.begin() + r.begin(), start.begin() + r.end(), 0u);
-                      });
+    fillInParallel(start, 0u);
     overItems(
         [&](uint32_t k, uint32_t) { __atomic_fetch_add(&start[k + 1], 1u, __ATOMIC_RELAXED); });
     for (size_t k = 0; k < keys; ++k)

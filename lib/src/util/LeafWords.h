@@ -26,19 +26,19 @@ struct LeafWords
             in[i >> 6] |= uint64_t(v[i] < 0) << (i & 63);
     }
 };
-/// The bits of one word (a leaf's x) with y in [y0, y1] and z in [z0, z1], leaf-local (0 to 7,
-/// y0 <= y1, z0 <= z1): a box of voxels is set a word an x instead of a voxel at a time.
-inline uint64_t boxWord(int y0, int y1, int z0, int z1)
-{
-    const uint64_t zRun = ((uint64_t(2) << (z1 - z0)) - 1) << z0;         // < 256: no carries below
-    const uint64_t rows = 0x0101010101010101ULL >> (8 * (7 - (y1 - y0))); // one bit a row
-    return zRun * (rows << (8 * y0));
-}
-
 constexpr uint64_t kZBelow7 = 0x7F7F7F7F7F7F7F7FULL; // bits with z < 7
 constexpr uint64_t kYBelow7 = 0x00FFFFFFFFFFFFFFULL; // bits with y < 7
 constexpr uint64_t kZ0 = 0x0101010101010101ULL;      // bits with z = 0
 constexpr uint64_t kZ7 = kZ0 << 7, kY7 = 0xFFULL << 56;
+
+/// The bits of one word (a leaf's x) with y in [y0, y1] and z in [z0, z1], leaf-local (0 to 7,
+/// y0 <= y1, z0 <= z1): a box of voxels is set a word an x instead of a voxel at a time.
+inline uint64_t boxWord(int y0, int y1, int z0, int z1)
+{
+    const uint64_t zRun = ((uint64_t(2) << (z1 - z0)) - 1) << z0; // < 256: no carries below
+    const uint64_t rows = kZ0 >> (8 * (7 - (y1 - y0)));           // one bit a row
+    return zRun * (rows << (8 * y0));
+}
 
 } // namespace util
 } // namespace fluidsurf

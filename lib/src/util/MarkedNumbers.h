@@ -1,5 +1,6 @@
 // MarkedNumbers.h - numbering the marked positions of a range in order, on all threads (the
-// particle index's occupied cells, Loop's edges, the components' roots): each fixed chunk
+// particle index's occupied cells and kept particles, the band's seeds, Loop's edges, the
+// components' roots, decimation's kept points): each fixed chunk
 // counts its marks, then walks again from where the earlier chunks' end. The same numbers as
 // one thread counting from the start, for any thread count.
 #pragma once

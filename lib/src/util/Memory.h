@@ -7,6 +7,10 @@
 // a millisecond here.
 #pragma once
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <memory> // (first: a C++ header defines __GLIBC__ for the test below)
 #include <new>
 #include <type_traits>
@@ -55,6 +59,16 @@ template <typename T> struct NoInitAllocator : std::allocator<T>
 /// A vector whose new elements are not zeroed (see NoInitAllocator): for arrays of hundreds of
 /// MB that parallel loops fill whole, which one thread would otherwise zero first.
 template <typename T> using NoInitVector = std::vector<T, NoInitAllocator<T>>;
+
+/// Every element of v set to value, on all threads: a NoInitVector's pages are first touched
+/// here, not by one thread zeroing them.
+template <typename Vector, typename T> void fillInParallel(Vector& v, const T& value)
+{
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, v.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+            std::fill(v.begin() + ptrdiff_t(r.begin()), v.begin() + ptrdiff_t(r.end()), value);
+        });
+}
 
 } // namespace util
 } // namespace fluidsurf
