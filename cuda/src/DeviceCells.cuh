@@ -5,6 +5,7 @@
 #pragma once
 
 #include "Morton.cuh"
+#include "neighbors/CellSlot.h"
 
 #include <cstdint>
 
@@ -30,11 +31,11 @@ struct DeviceCells
 
 constexpr unsigned long long kEmptyKey = ~0ull;
 
-/// The CPU's slot function (CellIndex.cc).
+/// The CPU's slot function (neighbors/CellSlot.h, the same code).
 __device__ __forceinline__ unsigned long long slotOf(unsigned long long key,
                                                      unsigned long long mask)
 {
-    return ((key * 0x9e3779b97f4a7c15ull) >> 17) & mask;
+    return neighbors::cellSlot(key, mask);
 }
 
 /// Cell coordinate of a world position along an axis, clamped to [-1, dims] (CellIndex::cellCoord).

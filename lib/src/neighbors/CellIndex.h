@@ -10,6 +10,7 @@
 // close in space close in memory.
 #pragma once
 
+#include "neighbors/CellSlot.h"
 #include "util/Memory.h"
 
 #include <fluidsurf/Context.h>
@@ -43,10 +44,10 @@ inline uint64_t mortonKey(uint32_t cx, uint32_t cy, uint32_t cz)
     return spreadBits(cx) | spreadBits(cy) << 1 | spreadBits(cz) << 2;
 }
 
-/// The hash table's first slot for a key (a table of mask + 1 slots).
+/// The hash table's first slot for a key (a table of mask + 1 slots): neighbors/CellSlot.h.
 inline size_t slotOfKey(uint64_t key, size_t mask)
 {
-    return size_t((key * 0x9e3779b97f4a7c15ull) >> 17) & mask;
+    return size_t(cellSlot(key, mask));
 }
 
 struct CellRange

@@ -131,6 +131,71 @@ TEST(CellIndex, ManyCellsAcrossChunksAreAllFoundAndNoOthers)
     EXPECT_GT(empty, 10000u); // the lookup was asked about cells it must not find
 }
 
+TEST(CellIndex, BrickKeysStartInOneRunOfSlots)
+{
+    // The 64 keys of a 4x4x4 brick (Morton keys equal but for their lowest 6 bits) start in one
+    // run of 64 slots, each at its place in the brick: a neighbourhood's look-ups share cache
+    // lines. Any table size (down to the smallest, 16 slots) keeps each slot in the table.
+    for (uint64_t mask : {uint64_t(15), uint64_t(63), uint64_t(1023), (uint64_t(1) << 26) - 1})
+        for (uint32_t bx : {0u, 1u, 77u, 4000u})
+            for (uint32_t by : {0u, 5u, 131071u})
+                for (uint32_t bz : {0u, 3u}) {
+                    const uint64_t first = cellSlot(mortonKey(4 * bx, 4 * by, 4 * bz), mask);
+                    for (uint32_t i = 0; i < 64; ++i) {
+                        const uint64_t key =
+                            mortonKey(4 * bx + (i & 3), 4 * by + (i >> 2 & 3), 4 * bz + (i >> 4));
+                        const uint64_t slot = cellSlot(key, mask);
+                        ASSERT_LE(slot, mask);
+                        ASSERT_EQ(slot & ~uint64_t(63) & mask, first & ~uint64_t(63) & mask);
+                        ASSERT_EQ(slot & 63 & mask, key & 63 & mask);
+                    }
+                }
+}
+
+TEST(CellIndex, CrowdedSlotsAreAllFoundAndNoOthers)
+{
+    // Layouts that crowd the table's runs of slots: full bricks side by side (their runs collide
+    // whole), every occupied cell at the same place in its brick (a lattice of stride 4 cells),
+    // and a row of cells 64 apart. Every occupied cell must be found with its own particles,
+    // and every empty cell in the grid must not be.
+    const double cell = 1.0;
+    std::vector<std::vector<std::array<int, 3>>> layouts(3);
+    for (int z = 0; z < 24; ++z)
+        for (int y = 0; y < 24; ++y)
+            for (int x = 0; x < 40; ++x)
+                layouts[0].push_back({x, y, z});
+    for (int z = 0; z < 64; z += 4)
+        for (int y = 0; y < 64; y += 4)
+            for (int x = 0; x < 128; x += 4)
+                layouts[1].push_back({x, y, z});
+    for (int x = 0; x < 64 * 300; x += 64)
+        layouts[2].push_back({x, 5, 9});
+    for (const auto& cells : layouts) {
+        std::vector<Vec3f> pts;
+        for (const auto& c : cells)
+            pts.emplace_back(float(c[0] + 0.5), float(c[1] + 0.5), float(c[2] + 0.5));
+        Context ctx;
+        const CellIndex index = buildCellIndex(pts.data(), nullptr, pts.size(), cell, ctx);
+        ASSERT_EQ(index.cellCount(), cells.size());
+        std::set<std::array<int64_t, 3>> occupied;
+        for (size_t i = 0; i < index.size(); ++i) {
+            std::array<int64_t, 3> cc;
+            for (int a = 0; a < 3; ++a)
+                cc[a] = index.cellCoord(index.positions[i][a], a);
+            occupied.insert(cc);
+            const CellRange r = index.find(cc[0], cc[1], cc[2]);
+            ASSERT_EQ(r.end - r.begin, 1u) << i;
+            ASSERT_EQ(r.begin, i);
+        }
+        ASSERT_EQ(occupied.size(), cells.size());
+        for (int64_t z = 0; z < index.dims[2]; ++z)
+            for (int64_t y = 0; y < index.dims[1]; ++y)
+                for (int64_t x = 0; x<index.dims[0]; x += index.dims[0]> 1000 ? 7 : 1)
+                    if (!occupied.count({x, y, z}))
+                        ASSERT_TRUE(index.find(x, y, z).empty()) << x << " " << y << " " << z;
+    }
+}
+
 TEST(CellIndex, KeepParticlesGivesWhatOneThreadMovingThemDownGives)
 {
     // reference: the kept particles copied out in order, the cells with any kept particle, each
