@@ -1,4 +1,9 @@
 // Classify.cc - neighbour counts and color field per particle, cell by cell.
+// The cell loop's templates take and return AVX registers in its AVX2 instance (wideCells).
+// They are always inlined there, so no call passes one; GCC still warns at the templates, which
+// are compiled for the default target.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 #include "classify/Classify.h"
 
 #include "util/Lanes.h"
@@ -37,44 +42,62 @@ bool sameSpot(const Vec3f& a, const Vec3f& b, float tolerance)
 struct Neighbourhood
 {
     std::vector<float> x, y, z, v;
-    /// per group, padded to a multiple of util::kLanes with groups out of every reach
+    /// per group, padded to a multiple of util::kWideLanes with groups out of every reach
     std::vector<float> x0, x1, y0, y1, z0, z1;
 
     /// The particles of index's cells overlapping [lo, hi] (CellIndex::forEachCellInBox's
-    /// order), relative to o; volumes from the radii, or uniformVolume without them.
-    void gather(const neighbors::CellIndex& index, neighbors::NearbyCells& cells,
-                const double lo[3], const double hi[3], const Vec3f& o, double uniformVolume)
+    /// order), relative to o; volumes from the radii, or uniformVolume without them. Inlined
+    /// into each register width's cell loop (classifyCells): its loops over the candidates are
+    /// vectorised there, an AVX register at a time where the CPU has AVX2. Each coordinate is
+    /// float(double(c) - o) whatever the width: the same operations, the same bits. (The copy
+    /// was half of classification's time on the 13.1M drop, a cell's 216 candidates serving
+    /// its 8 particles.)
+    __attribute__((always_inline)) inline void gather(const neighbors::CellIndex& index,
+                                                      neighbors::NearbyCells& cells,
+                                                      const double lo[3], const double hi[3],
+                                                      const Vec3f& o, double uniformVolume)
     {
         constexpr float kFar = 3e38f; // (h^2 - d^2 < 0 for anything this far: an exact zero)
         mRanges.clear();
         size_t m = 0;
-        index.forEachCellInBox(cells, lo, hi, [&](uint32_t b, uint32_t e) {
-            mRanges.push_back({b, e});
+        cells.forEachCellInBox(lo, hi, [&](uint32_t b, uint32_t e) {
+            mRanges.push_back(uint64_t(e) << 32 | b);
             m += e - b;
         });
         const size_t size = (m + kClassLanes - 1) / kClassLanes * kClassLanes;
         for (std::vector<float>* c : {&x, &y, &z, &v})
             c->resize(size);
+        float *xs = x.data(), *ys = y.data(), *zs = z.data(), *vs = v.data();
         size_t k = 0;
-        for (const auto& r : mRanges)
-            for (uint32_t j = r.first; j < r.second; ++j, ++k) {
-                const Vec3f& p = index.positions[j];
-                x[k] = float(double(p.x) - o.x);
-                y[k] = float(double(p.y) - o.y);
-                z[k] = float(double(p.z) - o.z);
-                const double rj = index.radii.empty() ? 0 : index.radii[j];
-                v[k] = float(index.radii.empty() ? uniformVolume : 8 * rj * rj * rj);
+        for (const uint64_t r : mRanges) {
+            const uint32_t first = uint32_t(r), n = uint32_t(r >> 32) - first;
+            const Vec3f* p = &index.positions[first];
+            for (size_t j = 0; j < n; ++j)
+                xs[k + j] = p[j].x, ys[k + j] = p[j].y, zs[k + j] = p[j].z;
+            if (!index.radii.empty()) {
+                const float* rs = &index.radii[first];
+                for (size_t j = 0; j < n; ++j) {
+                    const double rj = rs[j];
+                    vs[k + j] = float(8 * rj * rj * rj);
+                }
             }
+            k += n;
+        }
+        const double ox = o.x, oy = o.y, oz = o.z;
+        for (size_t j = 0; j < m; ++j)
+            xs[j] = float(double(xs[j]) - ox), ys[j] = float(double(ys[j]) - oy),
+            zs[j] = float(double(zs[j]) - oz);
+        if (index.radii.empty()) std::fill(vs, vs + m, float(uniformVolume));
         for (; k < size; ++k)
-            x[k] = y[k] = z[k] = kFar, v[k] = 0;
+            xs[k] = ys[k] = zs[k] = kFar, vs[k] = 0;
         const size_t groups = size / kClassLanes;
-        const size_t padded = (groups + util::kLanes - 1) / util::kLanes * util::kLanes;
+        const size_t padded = (groups + util::kWideLanes - 1) / util::kWideLanes * util::kWideLanes;
         for (std::vector<float>* c : {&x0, &x1, &y0, &y1, &z0, &z1})
             c->resize(padded);
         for (size_t g = 0; g < groups; ++g) {
-            bound(x, g, x0[g], x1[g]);
-            bound(y, g, y0[g], y1[g]);
-            bound(z, g, z0[g], z1[g]);
+            bound(xs, g, x0[g], x1[g]);
+            bound(ys, g, y0[g], y1[g]);
+            bound(zs, g, z0[g], z1[g]);
         }
         for (size_t g = groups; g < padded; ++g)
             x0[g] = x1[g] = y0[g] = y1[g] = z0[g] = z1[g] = kFar;
@@ -82,7 +105,7 @@ struct Neighbourhood
 
 private:
     /// The least and largest of group g's coordinates c (two registers of util::kLanes)
-    static void bound(const std::vector<float>& c, size_t g, float& lo, float& hi)
+    __attribute__((always_inline)) static void bound(const float* c, size_t g, float& lo, float& hi)
     {
         static_assert(kClassLanes == 2 * util::kLanes);
         const util::Lanes a = util::loadLanes(&c[g * kClassLanes]),
@@ -92,8 +115,23 @@ private:
         hi = std::max(std::max(u[0], u[1]), std::max(u[2], u[3]));
     }
 
-    std::vector<std::pair<uint32_t, uint32_t>> mRanges; ///< the cells' particles
+    /// The cells' particles, end << 32 | begin: one 64-bit store and load each (as a pair of
+    /// two 32-bit stores read back at once, the store could not be forwarded to the load: a
+    /// stall per cell and an eighth of classification's samples).
+    std::vector<uint64_t> mRanges;
 };
+
+/// Per lane, a group's float distance to (its bounds lo, hi on one axis) from p, 0 inside.
+template <typename V>
+__attribute__((always_inline)) inline V reachOf(const float* lo, const float* hi, float p)
+{
+    V l, h;
+    std::memcpy(&l, lo, sizeof l);
+    std::memcpy(&h, hi, sizeof h);
+    const V below = l - p, above = p - h;
+    const V e = below > above ? below : above;
+    return e > 0.f ? e : V{};
+}
 
 /// The groups of nb that may hold a candidate closer than h to (px, py, pz), into `live`, in
 /// order; returns how many. A group left out adds nothing to the sums: each lane's d^2 =
@@ -101,22 +139,20 @@ private:
 /// distance to the bounds per axis (float subtraction, squares and sums are monotonic), so
 /// when that is >= h^2, every lane's t is 0, its count 0 and every product an exact +-0; a sum
 /// that starts at +0 is never -0, and x + (+-0) = x. So the lanes hold the same bits as with
-/// every group, which the device sums (cuda/src/Classify.cu).
-size_t liveGroups(const Neighbourhood& nb, float px, float py, float pz, float h2, uint32_t* live)
+/// every group, which the device sums (cuda/src/Classify.cu). V: the groups tested at once (4
+/// or 8; the same list either way).
+template <typename V>
+__attribute__((always_inline)) inline size_t liveGroups(const Neighbourhood& nb, float px, float py,
+                                                        float pz, float h2, uint32_t* live)
 {
-    using V = util::Lanes;
+    constexpr int kWidth = sizeof(V) / sizeof(float);
     size_t n = 0;
-    for (size_t g = 0; g < nb.x0.size(); g += util::kLanes) {
-        const auto reach = [&](const std::vector<float>& lo, const std::vector<float>& hi,
-                               float p) {
-            const V below = util::loadLanes(&lo[g]) - p, above = p - util::loadLanes(&hi[g]);
-            const V e = below > above ? below : above;
-            return e > 0.f ? e : V{};
-        };
-        const V ex = reach(nb.x0, nb.x1, px), ey = reach(nb.y0, nb.y1, py),
-                ez = reach(nb.z0, nb.z1, pz);
+    for (size_t g = 0; g < nb.x0.size(); g += kWidth) {
+        const V ex = reachOf<V>(&nb.x0[g], &nb.x1[g], px),
+                ey = reachOf<V>(&nb.y0[g], &nb.y1[g], py),
+                ez = reachOf<V>(&nb.z0[g], &nb.z1[g], pz);
         const auto near = ex * ex + ey * ey + ez * ez < h2;
-        for (int l = 0; l < util::kLanes; ++l)
+        for (int l = 0; l < kWidth; ++l)
             live[n] = uint32_t(g + l), n += near[l] != 0; // no branch: half are live
     }
     return n;
@@ -161,19 +197,99 @@ __attribute__((always_inline)) inline void laneSums(const Neighbourhood& nb, con
     std::memcpy(out.gz, gz, sizeof gz);
 }
 
-/// laneSums in one AVX register, where the CPU has AVX2 (half the loop of two SSE registers):
-/// compiled for that target alone and picked at run time, so the build runs on any x86-64.
-__attribute__((target("avx2"))) void wideLaneSums(const Neighbourhood& nb, const uint32_t* live,
-                                                  size_t nLive, float px, float py, float pz,
-                                                  float h2, LaneSums& out)
+/// What classifyCells reads and writes.
+struct CellWork
 {
-    laneSums<util::WideLanes, 1>(nb, live, nLive, px, py, pz, h2, out);
+    const neighbors::CellIndex& index;
+    double h, uniformVolume;
+    float h2;
+    ClassRule rule;
+    bool withNormals;
+    Classification& out;
+};
+
+/// The particles of cells [begin, end): each cell gathers its neighbourhood once, then each of
+/// its particles sums the live groups. V, N: the sums' registers (see laneSums); the gather and
+/// the groups' reach run in registers as wide as V.
+template <typename V, int N>
+__attribute__((always_inline)) inline void classifyCells(const CellWork& w, size_t begin,
+                                                         size_t end)
+{
+    const neighbors::CellIndex& index = w.index;
+    Classification& out = w.out;
+    const double h = w.h;
+    const float h2 = w.h2;
+    Neighbourhood nb;
+    neighbors::NearbyCells nearby(index);
+    std::vector<uint32_t> live;
+    for (size_t c = begin; c != end; ++c) {
+        const uint32_t b = index.starts[c], e = index.starts[c + 1];
+        // Box of the cell's particles, widened by h: everything any of them can reach.
+        // Coordinates relative to the first particle keep float rounding small.
+        const Vec3f o = index.positions[b];
+        double lo[3] = {o.x, o.y, o.z}, hi[3] = {o.x, o.y, o.z};
+        for (uint32_t i = b; i < e; ++i)
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::min(lo[a], double(index.positions[i][a]));
+                hi[a] = std::max(hi[a], double(index.positions[i][a]));
+            }
+        for (int a = 0; a < 3; ++a)
+            lo[a] -= h, hi[a] += h;
+        nb.gather(index, nearby, lo, hi, o, w.uniformVolume);
+        live.resize(nb.x0.size());
+        uint32_t computed = b;
+        for (uint32_t i = b; i < e; ++i) {
+            const Vec3f& p = index.positions[i];
+            // A particle at the spot of the last computed one has its sums: coincident
+            // particles (a degenerate frame piles 1e5 on one point, often with a little
+            // noise) cost one neighbourhood pass per spot instead of one each. No two
+            // particles of a real fluid come within kSameSpot * h of each other, so
+            // real frames are computed particle by particle as before.
+            if (i > b && sameSpot(p, index.positions[computed], float(h * kSameSpot))) {
+                out.neighbours[i] = out.neighbours[computed];
+                out.colorField[i] = out.colorField[computed];
+                out.colorGradient[i] = out.colorGradient[computed];
+                out.classes[i] = out.classes[computed];
+                if (w.withNormals) out.normals[i] = out.normals[computed];
+                continue;
+            }
+            computed = i;
+            const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y),
+                        pz = float(double(p.z) - o.z);
+            const size_t nLive = liveGroups<V>(nb, px, py, pz, h2, live.data());
+            LaneSums sums;
+            laneSums<V, N>(nb, live.data(), nLive, px, py, pz, h2, sums);
+            const ParticleSums ps =
+                classifyLanes(sums.count, sums.cf, sums.gx, sums.gy, sums.gz, w.rule);
+            out.neighbours[i] = ps.neighbours;
+            out.colorField[i] = ps.colorField;
+            out.colorGradient[i] = ps.gradient;
+            out.classes[i] = ps.cls;
+            if (w.withNormals && isSurface(ps.cls)) {
+                // The gradient's sum points into the fluid (d = x_j - x_i).
+                double g[3] = {0, 0, 0};
+                for (int l = 0; l < kClassLanes; ++l)
+                    g[0] += sums.gx[l], g[1] += sums.gy[l], g[2] += sums.gz[l];
+                const double len = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+                if (len > 0)
+                    out.normals[i] =
+                        Vec3f(float(-g[0] / len), float(-g[1] / len), float(-g[2] / len));
+            }
+        }
+    }
 }
 
-void narrowLaneSums(const Neighbourhood& nb, const uint32_t* live, size_t nLive, float px, float py,
-                    float pz, float h2, LaneSums& out)
+/// classifyCells in AVX registers, where the CPU has AVX2 (the sums in half the loop of two SSE
+/// registers, the gather and the reach in twice the width): compiled for that target alone and
+/// picked at run time, so the build runs on any x86-64. No FMA: the device's bits.
+__attribute__((target("avx2"))) void wideCells(const CellWork& w, size_t begin, size_t end)
 {
-    laneSums<util::Lanes, 2>(nb, live, nLive, px, py, pz, h2, out);
+    classifyCells<util::WideLanes, 1>(w, begin, end);
+}
+
+void narrowCells(const CellWork& w, size_t begin, size_t end)
+{
+    classifyCells<util::Lanes, 2>(w, begin, end);
 }
 
 } // namespace
@@ -222,75 +338,14 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     out.colorGradient.resize(n);
     if (withNormals) out.normals.assign(n, Vec3f(0, 0, 0));
     const KernelConstants k = kernelConstants(params);
-    const ClassRule rule = classRule(params);
-    const double h = k.h, uniformVolume = k.uniformVolume;
-    const float h2 = k.h2;
     static_assert(kClassLanes == util::kWideLanes && kClassLanes == 2 * util::kLanes);
-    const auto sumsOf = registerLanes == util::kWideLanes ? wideLaneSums : narrowLaneSums;
-
-    tbb::parallel_for(
-        tbb::blocked_range<size_t>(0, index.cellCount(), 16),
-        [&](const tbb::blocked_range<size_t>& cells) {
-            ctx.checkpoint();
-            Neighbourhood nb;
-            neighbors::NearbyCells nearby(index);
-            std::vector<uint32_t> live;
-            for (size_t c = cells.begin(); c != cells.end(); ++c) {
-                const uint32_t b = index.starts[c], e = index.starts[c + 1];
-                // Box of the cell's particles, widened by h: everything any of them can reach.
-                // Coordinates relative to the first particle keep float rounding small.
-                const Vec3f o = index.positions[b];
-                double lo[3] = {o.x, o.y, o.z}, hi[3] = {o.x, o.y, o.z};
-                for (uint32_t i = b; i < e; ++i)
-                    for (int a = 0; a < 3; ++a) {
-                        lo[a] = std::min(lo[a], double(index.positions[i][a]));
-                        hi[a] = std::max(hi[a], double(index.positions[i][a]));
-                    }
-                for (int a = 0; a < 3; ++a)
-                    lo[a] -= h, hi[a] += h;
-                nb.gather(index, nearby, lo, hi, o, uniformVolume);
-                live.resize(nb.x0.size());
-                uint32_t computed = b;
-                for (uint32_t i = b; i < e; ++i) {
-                    const Vec3f& p = index.positions[i];
-                    // A particle at the spot of the last computed one has its sums: coincident
-                    // particles (a degenerate frame piles 1e5 on one point, often with a little
-                    // noise) cost one neighbourhood pass per spot instead of one each. No two
-                    // particles of a real fluid come within kSameSpot * h of each other, so
-                    // real frames are computed particle by particle as before.
-                    if (i > b && sameSpot(p, index.positions[computed], float(h * kSameSpot))) {
-                        out.neighbours[i] = out.neighbours[computed];
-                        out.colorField[i] = out.colorField[computed];
-                        out.colorGradient[i] = out.colorGradient[computed];
-                        out.classes[i] = out.classes[computed];
-                        if (withNormals) out.normals[i] = out.normals[computed];
-                        continue;
-                    }
-                    computed = i;
-                    const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y),
-                                pz = float(double(p.z) - o.z);
-                    const size_t nLive = liveGroups(nb, px, py, pz, h2, live.data());
-                    LaneSums sums;
-                    sumsOf(nb, live.data(), nLive, px, py, pz, h2, sums);
-                    const ParticleSums ps =
-                        classifyLanes(sums.count, sums.cf, sums.gx, sums.gy, sums.gz, rule);
-                    out.neighbours[i] = ps.neighbours;
-                    out.colorField[i] = ps.colorField;
-                    out.colorGradient[i] = ps.gradient;
-                    out.classes[i] = ps.cls;
-                    if (withNormals && isSurface(ps.cls)) {
-                        // The gradient's sum points into the fluid (d = x_j - x_i).
-                        double g[3] = {0, 0, 0};
-                        for (int l = 0; l < kClassLanes; ++l)
-                            g[0] += sums.gx[l], g[1] += sums.gy[l], g[2] += sums.gz[l];
-                        const double len = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-                        if (len > 0)
-                            out.normals[i] =
-                                Vec3f(float(-g[0] / len), float(-g[1] / len), float(-g[2] / len));
-                    }
-                }
-            }
-        });
+    const CellWork work{index, k.h, k.uniformVolume, k.h2, classRule(params), withNormals, out};
+    const auto cellsOf = registerLanes == util::kWideLanes ? wideCells : narrowCells;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, index.cellCount(), 16),
+                      [&](const tbb::blocked_range<size_t>& cells) {
+                          ctx.checkpoint();
+                          cellsOf(work, cells.begin(), cells.end());
+                      });
     for (uint8_t c : out.classes) {
         if (c == Interior)
             ++out.interior;

@@ -26,14 +26,6 @@ struct Handle // the thesis' "handler": cell key and particle id
 };
 } // namespace
 
-int64_t CellIndex::cellCoord(double v, int axis) const
-{
-    const double c = std::floor((v - origin[axis]) / cellSize);
-    if (!(c >= 0)) return -1; // also NaN
-    if (c >= double(dims[axis])) return dims[axis];
-    return int64_t(c);
-}
-
 void CellIndex::buildLookup()
 {
     size_t size = 16;
