@@ -7,11 +7,14 @@
 #include "io/FileBuffer.h"
 #include "io/VdbGrids.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <iterator>
+#include <memory>
 #include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 namespace fluidsurf {
 namespace io {
@@ -83,29 +86,53 @@ namespace {
 // for caches, so a hash of the content serves better: equal grids give equal bytes.
 constexpr size_t kUuidOffset = 8 + 4 + 4 + 4 + 1, kUuidLength = 36;
 
+/// The file's bytes after the UUID, hashed as they are read back a chunk at a time. Read into
+/// one vector through a stream iterator, the file took as long as OpenVDB took to write it (0.37
+/// s of the 1.7M-particle frame's 0.85 s `write`) and held a second copy of it at the peak.
 void makeUuidDeterministic(const std::string& path)
 {
-    std::ifstream in(path, std::ios::binary);
-    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!in.eof() && in.fail()) throw OutputError(path + ": cannot read back the written file");
-    in.close();
-    if (bytes.size() < kUuidOffset + kUuidLength || bytes[kUuidOffset + 8] != '-' ||
-        bytes[kUuidOffset + 13] != '-')
+    const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+    if (fd < 0) throw OutputError(path + ": cannot read back the written file");
+    struct Closer
+    {
+        int fd;
+        ~Closer() { ::close(fd); }
+    } closer{fd};
+    // (pread returns short counts only at the end of the file or when interrupted)
+    auto readAt = [&](uint8_t* to, size_t n, size_t at) {
+        size_t done = 0;
+        while (done < n) {
+            const ssize_t got = ::pread(fd, to + done, n - done, off_t(at + done));
+            if (got < 0 && errno == EINTR) continue;
+            if (got < 0) throw OutputError(path + ": cannot read back the written file");
+            if (got == 0) break;
+            done += size_t(got);
+        }
+        return done;
+    };
+    uint8_t head[kUuidOffset + kUuidLength];
+    if (readAt(head, sizeof head, 0) < sizeof head || head[kUuidOffset + 8] != '-' ||
+        head[kUuidOffset + 13] != '-')
         throw OutputError(path + ": unexpected VDB header layout (OpenVDB version?)");
-    uint64_t h[2] = {0xcbf29ce484222325ull, 0x84222325cbf29ce4ull}; // two FNV-1a streams
-    for (size_t i = kUuidOffset + kUuidLength; i < bytes.size(); ++i) {
-        h[0] = (h[0] ^ uint8_t(bytes[i])) * 0x100000001b3ull;
-        h[1] = (h[1] ^ uint8_t(bytes[i]) ^ 0x5a) * 0x100000001b3ull;
+    constexpr size_t kChunk = size_t(4) << 20;
+    const std::unique_ptr<uint8_t[]> chunk(new uint8_t[kChunk]);
+    uint64_t h0 = 0xcbf29ce484222325ull, h1 = 0x84222325cbf29ce4ull; // two FNV-1a streams
+    for (size_t at = sizeof head;;) {
+        const size_t got = readAt(chunk.get(), kChunk, at);
+        for (size_t i = 0; i < got; ++i) {
+            h0 = (h0 ^ chunk[i]) * 0x100000001b3ull;
+            h1 = (h1 ^ chunk[i] ^ 0x5a) * 0x100000001b3ull;
+        }
+        if (got < kChunk) break;
+        at += got;
     }
     char uuid[40];
-    std::snprintf(uuid, sizeof(uuid), "%08x-%04x-%04x-%04x-%012llx", unsigned(h[0] >> 32),
-                  unsigned(h[0] >> 16) & 0xffff, (unsigned(h[0]) & 0x0fff) | 0x4000,
-                  (unsigned(h[1] >> 48) & 0x3fff) | 0x8000,
-                  (unsigned long long)(h[1] & 0xffffffffffffull));
-    std::fstream out(path, std::ios::binary | std::ios::in | std::ios::out);
-    out.seekp(std::streamoff(kUuidOffset));
-    out.write(uuid, kUuidLength);
-    if (!out) throw OutputError(path + ": cannot write the file header");
+    std::snprintf(uuid, sizeof(uuid), "%08x-%04x-%04x-%04x-%012llx", unsigned(h0 >> 32),
+                  unsigned(h0 >> 16) & 0xffff, (unsigned(h0) & 0x0fff) | 0x4000,
+                  (unsigned(h1 >> 48) & 0x3fff) | 0x8000,
+                  (unsigned long long)(h1 & 0xffffffffffffull));
+    if (::pwrite(fd, uuid, kUuidLength, off_t(kUuidOffset)) != ssize_t(kUuidLength))
+        throw OutputError(path + ": cannot write the file header");
 }
 } // namespace
 

@@ -14,6 +14,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 namespace fluidsurf {
 namespace {
 
@@ -67,6 +69,40 @@ TEST(LevelSetIO, DescribesOpenVdbsOwnSphere)
     // Index-space bounds of a sphere of 20 voxels around (10, 20, 30), +-3 voxels of band.
     EXPECT_NEAR(double(d[0].bboxMin[0]), 10 - 20 - 3, 1.0);
     EXPECT_NEAR(double(d[0].bboxMax[2]), 30 + 20 + 3, 1.0);
+}
+
+TEST(LevelSetIO, UuidIsTheHashOfTheBytesAfterIt)
+{
+    // The UUID in the header (bytes 21 to 56) is made from the file's content: two FNV-1a
+    // streams over every byte after it, written here plainly over the file read whole. The
+    // writer hashes the file a chunk of 4 MiB at a time: this file is larger, so the chunks'
+    // seams are crossed. Equal grids give equal files; another grid another UUID.
+    openvdb::initialize();
+    auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        160.0f, openvdb::Vec3f(0, 0, 0), 1.0f, 3.0f);
+    const test::TempDir dir;
+    io::writeLevelSet({sphere}, dir.path("a.vdb"));
+    io::writeLevelSet({sphere}, dir.path("b.vdb"));
+    const std::string a = test::readFileBytes(dir.path("a.vdb")),
+                      b = test::readFileBytes(dir.path("b.vdb"));
+    ASSERT_GT(a.size(), size_t(5) << 20);
+    EXPECT_EQ(a, b);
+    constexpr size_t kAt = 21, kLength = 36;
+    uint64_t h[2] = {0xcbf29ce484222325ull, 0x84222325cbf29ce4ull};
+    for (size_t i = kAt + kLength; i < a.size(); ++i) {
+        h[0] = (h[0] ^ uint8_t(a[i])) * 0x100000001b3ull;
+        h[1] = (h[1] ^ uint8_t(a[i]) ^ 0x5a) * 0x100000001b3ull;
+    }
+    char uuid[40];
+    std::snprintf(uuid, sizeof(uuid), "%08x-%04x-%04x-%04x-%012llx", unsigned(h[0] >> 32),
+                  unsigned(h[0] >> 16) & 0xffff, (unsigned(h[0]) & 0x0fff) | 0x4000,
+                  (unsigned(h[1] >> 48) & 0x3fff) | 0x8000,
+                  (unsigned long long)(h[1] & 0xffffffffffffull));
+    EXPECT_EQ(a.substr(kAt, kLength), std::string(uuid));
+    auto other = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        161.0f, openvdb::Vec3f(0, 0, 0), 1.0f, 3.0f);
+    io::writeLevelSet({other}, dir.path("c.vdb"));
+    EXPECT_NE(test::readFileBytes(dir.path("c.vdb")).substr(kAt, kLength), a.substr(kAt, kLength));
 }
 
 TEST(LevelSetIO, CorruptVdbIsOneInputError)
