@@ -49,7 +49,7 @@ struct Neighbourhood
     /// order), relative to o; volumes from the radii, or uniformVolume without them. Inlined
     /// into each register width's cell loop (classifyCells): its loops over the candidates are
     /// vectorised there, an AVX register at a time where the CPU has AVX2. Each coordinate is
-    /// float(double(c) - o) whatever the width: the same operations, the same bits. (The copy
+    /// float(double(c) - o) whatever the width: the same operations, the same bits. (The gather
     /// was half of classification's time on the 13.1M drop, a cell's 216 candidates serving
     /// its 8 particles.)
     __attribute__((always_inline)) inline void gather(const neighbors::CellIndex& index,
@@ -117,7 +117,7 @@ private:
 
     /// The cells' particles, end << 32 | begin: one 64-bit store and load each (as a pair of
     /// two 32-bit stores read back at once, the store could not be forwarded to the load: a
-    /// stall per cell and an eighth of classification's samples).
+    /// stall per cell, 8% of the cell loop's samples).
     std::vector<uint64_t> mRanges;
 };
 

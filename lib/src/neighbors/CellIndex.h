@@ -116,13 +116,6 @@ struct CellIndex
     /// ascending (z, y, x) cell order (deterministic).
     template <typename F> void forEachCellInBox(const double lo[3], const double hi[3], F&& f) const
     {
-        forEachCellInBox(*this, lo, hi, f);
-    }
-
-    /// The same with the cells looked up by finder.find(cx, cy, cz) (see NearbyCells).
-    template <typename Finder, typename F>
-    void forEachCellInBox(Finder& finder, const double lo[3], const double hi[3], F&& f) const
-    {
         int64_t c0[3], c1[3];
         for (int a = 0; a < 3; ++a) {
             c0[a] = cellCoord(lo[a], a);
@@ -131,18 +124,17 @@ struct CellIndex
         for (int64_t cz = c0[2]; cz <= c1[2]; ++cz)
             for (int64_t cy = c0[1]; cy <= c1[1]; ++cy)
                 for (int64_t cx = c0[0]; cx <= c1[0]; ++cx) {
-                    const CellRange r = finder.find(cx, cy, cz);
+                    const CellRange r = find(cx, cy, cz);
                     if (!r.empty()) f(r.begin, r.end);
                 }
     }
 };
 
-/// CellIndex::find for a walk that stays in one neighbourhood for a while, such as a thread's
-/// run of cells in index (Morton) order, each looking up the cells its box reaches: the last
-/// answer for each cell position modulo 8 per axis is kept, and checked by its key. A 4x4x4
-/// Morton block of cells and their reach fit without clashes, so most look-ups are answered
-/// from 8 KB here instead of a hash table of tens of MB (each probe a cache miss). One per
-/// thread.
+/// CellIndex::forEachCellInBox for a walk that stays in one neighbourhood for a while, such as a
+/// thread's run of cells in index (Morton) order, each looking up the cells its box reaches: the
+/// last answer for each cell position modulo 8 per axis is kept, and checked by its key. A 4x4x4
+/// Morton block of cells and their reach fit without clashes, so most look-ups are answered from
+/// 8 KB here instead of the hash table. One per thread.
 class NearbyCells
 {
 public:
@@ -150,13 +142,6 @@ public:
     {
         for (Entry& e : mEntries)
             e.key = CellIndex::kEmptyKey;
-    }
-    CellRange find(int64_t cx, int64_t cy, int64_t cz)
-    {
-        if (cx < 0 || cy < 0 || cz < 0 || cx >= mIndex.dims[0] || cy >= mIndex.dims[1] ||
-            cz >= mIndex.dims[2])
-            return {};
-        return find(cx, cy, cz, mortonKey(uint32_t(cx), uint32_t(cy), uint32_t(cz)));
     }
 
     /// CellIndex::forEachCellInBox(lo, hi, f) through this cache: the same cells in the same
