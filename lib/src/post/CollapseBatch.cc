@@ -17,9 +17,11 @@ namespace post {
 namespace detail {
 namespace {
 
-/// Lanes [first, first + the lanes of V) of the batch.
+/// Lanes [first, first + the lanes of V) of the batch: their errors into out, and their points
+/// into points (points[k][lane], if given).
 template <typename V>
-FLUIDSURF_QUADRIC_INLINE void errorsOf(const CollapseBatch& b, int first, double* out)
+FLUIDSURF_QUADRIC_INLINE void errorsOf(const CollapseBatch& b, int first, double* out,
+                                       double (*points)[CollapseBatch::kSize])
 {
     constexpr int kFields = CollapseBatch::kFields;
     const CollapseBatch::Lanes& in = b.lanes();
@@ -39,17 +41,30 @@ FLUIDSURF_QUADRIC_INLINE void errorsOf(const CollapseBatch& b, int first, double
     V point[3], error;
     bestCollapse(a, pa, c, pb, point, error);
     std::memcpy(out + first, &error, sizeof error);
+    if (points)
+        for (int k = 0; k < 3; ++k)
+            std::memcpy(&points[k][first], &point[k], sizeof(V));
 }
 
-__attribute__((target("avx2"))) void wideErrors(const CollapseBatch& b, double* out)
+__attribute__((target("avx2"))) void wideErrors(const CollapseBatch& b, double* out,
+                                                double (*points)[CollapseBatch::kSize])
 {
-    errorsOf<util::WideDoubles>(b, 0, out);
+    errorsOf<util::WideDoubles>(b, 0, out, points);
 }
 
-void narrowErrors(const CollapseBatch& b, int n, double* out)
+void narrowErrors(const CollapseBatch& b, int n, double* out,
+                  double (*points)[CollapseBatch::kSize])
 {
-    errorsOf<util::Doubles>(b, 0, out);
-    if (n > 2) errorsOf<util::Doubles>(b, 2, out);
+    errorsOf<util::Doubles>(b, 0, out, points);
+    if (n > 2) errorsOf<util::Doubles>(b, 2, out, points);
+}
+
+/// lanes: 2, or 4 where the CPU has AVX2 (see CollapseBatch::errors).
+void checkLanes(int lanes)
+{
+    if (lanes != 2 && lanes != 4) throw ValueError("CollapseBatch: 2 or 4 doubles a register");
+    if (lanes > CollapseBatch::registerLanes())
+        throw ValueError("CollapseBatch: 4 doubles a register need a CPU with AVX2");
 }
 
 } // namespace
@@ -62,15 +77,25 @@ int CollapseBatch::registerLanes()
 
 void CollapseBatch::errors(int n, double* out, int lanes) const
 {
-    if (lanes != 2 && lanes != 4) throw ValueError("CollapseBatch: 2 or 4 doubles a register");
-    if (lanes > registerLanes())
-        throw ValueError("CollapseBatch: 4 doubles a register need a CPU with AVX2");
+    checkLanes(lanes);
     double all[kSize];
     if (lanes == 4)
-        wideErrors(*this, all);
+        wideErrors(*this, all, nullptr);
     else
-        narrowErrors(*this, n, all);
+        narrowErrors(*this, n, all, nullptr);
     std::memcpy(out, all, size_t(n) * sizeof(double));
+}
+
+void CollapseBatch::collapses(int n, Collapse* out, int lanes) const
+{
+    checkLanes(lanes);
+    double errors[kSize], points[3][kSize];
+    if (lanes == 4)
+        wideErrors(*this, errors, points);
+    else
+        narrowErrors(*this, n, errors, points);
+    for (int l = 0; l < n; ++l)
+        out[l] = {Vec3d(points[0][l], points[1][l], points[2][l]), errors[l]};
 }
 
 } // namespace detail

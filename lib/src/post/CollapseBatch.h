@@ -46,7 +46,8 @@ inline Collapse bestCollapse(const Quadric& qa, const Vec3d& pa, const Quadric& 
     return {Vec3d(point[0], point[1], point[2]), error};
 }
 
-/// Up to kSize edges: set() each, then errors() gives what bestCollapse would, bit for bit.
+/// Up to kSize edges: set() each, then errors() (or collapses(), with the points) gives what
+/// bestCollapse would, bit for bit.
 class CollapseBatch
 {
 public:
@@ -56,9 +57,12 @@ public:
     void set(int i, const Quadric& qa, const Vec3d& pa, const Quadric& qb, const Vec3d& pb)
     {
         static_assert(sizeof(Quadric) == kFields * sizeof(double), "a quadric: 11 doubles");
-        double a[kFields], b[kFields]; // (its fields in order: a00 ... w)
-        std::memcpy(a, &qa, sizeof a);
-        std::memcpy(b, &qb, sizeof b);
+        // field by field, in order (a00 ... w): a copy of each quadric to an array first was
+        // a third of the instructions here
+        const double a[kFields] = {qa.a00, qa.a01, qa.a02, qa.a11, qa.a12, qa.a22,
+                                   qa.b0,  qa.b1,  qa.b2,  qa.c,   qa.w};
+        const double b[kFields] = {qb.a00, qb.a01, qb.a02, qb.a11, qb.a12, qb.a22,
+                                   qb.b0,  qb.b1,  qb.b2,  qb.c,   qb.w};
         for (int k = 0; k < kFields; ++k)
             mLanes.qa[k][i] = a[k], mLanes.qb[k][i] = b[k];
         for (int k = 0; k < 3; ++k)
@@ -69,6 +73,8 @@ public:
     /// The errors of lanes [0, n), n <= kSize, with `lanes` doubles a register: 2, or 4 where
     /// registerLanes() is 4 (tests run both); ValueError otherwise.
     void errors(int n, double* out, int lanes = registerLanes()) const;
+    /// The collapses of lanes [0, n), points and errors, as errors() finds them.
+    void collapses(int n, Collapse* out, int lanes = registerLanes()) const;
 
     static constexpr int kFields = 11; ///< a quadric's doubles
     /// The lanes as set, field by field: what errors() loads into vectors.

@@ -102,35 +102,57 @@ struct BlockResult
 
 /// Vertex numbers local to a block, in the order they first appear: an open-addressing table
 /// sized by the block, one per thread and reused, instead of an array as long as the mesh (4
-/// bytes a vertex and a thread: 104 MB on 16 threads for a 1.7M-particle frame).
+/// bytes a vertex and a thread: 104 MB on 16 threads for a 1.7M-particle frame). Sized by the
+/// vertices numbered so far, at most half full: a table for three distinct vertices a triangle
+/// (the most a block can have) was twelve times a closed mesh's needs, and its look-ups missed
+/// the cache (a fifth of a block's set-up). The numbers do not depend on the table's size.
 class LocalNumbers
 {
 public:
-    /// Empty, with room for a block of at most `most` distinct vertices.
-    void reset(size_t most)
+    /// Empty, for a block of about `triangles` triangles.
+    void reset(size_t triangles)
     {
         size_t size = 64;
-        while (size < 2 * most)
+        while (size < triangles + 64) // a closed mesh has about half as many vertices
             size <<= 1;
-        mKeys.assign(size, kNone);
-        mValues.resize(size);
+        mSlots.assign(size, Slot{kNone, 0});
         mMask = size - 1;
     }
     /// v's number: the one it got, or the next (v appended to global).
     uint32_t number(uint32_t v, std::vector<uint32_t>& global)
     {
-        for (size_t h = (v * size_t(0x9E3779B1u)) >> 7 & mMask;; h = (h + 1) & mMask) {
-            if (mKeys[h] == v) return mValues[h];
-            if (mKeys[h] == kNone) {
-                mKeys[h] = v, mValues[h] = uint32_t(global.size());
+        for (size_t h = slotOf(v);; h = (h + 1) & mMask) {
+            Slot& s = mSlots[h];
+            if (s.key == v) return s.value;
+            if (s.key == kNone) {
+                s = Slot{v, uint32_t(global.size())};
                 global.push_back(v);
-                return mValues[h];
+                if (2 * global.size() > mSlots.size()) grow(global);
+                return uint32_t(global.size() - 1);
             }
         }
     }
 
 private:
-    std::vector<uint32_t> mKeys, mValues;
+    struct Slot
+    {
+        uint32_t key, value; // side by side: one cache line a probe
+    };
+    size_t slotOf(uint32_t v) const { return (v * size_t(0x9E3779B1u)) >> 7 & mMask; }
+    /// Twice the size, the numbers in `global` put back.
+    void grow(const std::vector<uint32_t>& global)
+    {
+        mSlots.assign(2 * mSlots.size(), Slot{kNone, 0});
+        mMask = mSlots.size() - 1;
+        for (size_t k = 0; k < global.size(); ++k) {
+            size_t h = slotOf(global[k]);
+            while (mSlots[h].key != kNone)
+                h = (h + 1) & mMask;
+            mSlots[h] = Slot{global[k], uint32_t(k)};
+        }
+    }
+
+    std::vector<Slot> mSlots;
     size_t mMask = 0;
 };
 
@@ -218,7 +240,7 @@ public:
         // mesh order): the same numbering every run, without a sort
         mTris.resize(n);
         mRefused.resize(n);
-        local.reset(3 * n);
+        local.reset(n);
         for (size_t i = 0; i < n; ++i) {
             mRefused[i] = s.refused[tris[i]];
             for (int k = 0; k < 3; ++k)
@@ -244,7 +266,7 @@ public:
         mOwn.resize(nv);
         for (size_t v = 0; v < nv; ++v)
             mOwn[v] = mCount[v] == valence[mGlobal[v]] && isClosedFan(uint32_t(v));
-        mVersion.assign(nv, 0);
+        mChangedAt.assign(nv, 0);
         mMark.assign(nv, 0);
         mMayRefuse.assign(nv, 0);
         for (size_t t = 0; t < n; ++t)
@@ -254,6 +276,9 @@ public:
         mQuadric.resize(nv);
         for (size_t v = 0; v < nv; ++v)
             mQuadric[v] = s.quadrics[mGlobal[v]].unpack();
+        mPoint.resize(nv);
+        for (size_t v = 0; v < nv; ++v)
+            mPoint[v] = s.points[mGlobal[v]];
     }
 
     BlockResult run(double threshold, const DecimateTarget& target, size_t budget)
@@ -263,6 +288,8 @@ public:
         mStep = StepGuard(mMaxStep);
         std::vector<Entry> entries; // made a heap at once: cheaper than pushing one by one
         entries.reserve(3 * mTris.size() / 2);
+        mFound.clear();
+        mFound.reserve(3 * mTris.size() / 2 + 8 * std::min(budget, mTris.size()));
         mEdges.clear();
         for (size_t t = 0; t < mTris.size(); ++t)
             for (int k = 0; k < 3; ++k) { // each inner edge once, from its lower end
@@ -278,9 +305,9 @@ public:
             mHeap.pop();
             if (popsAfterLast(e)) mLast = e, mPopped = true;
             const uint32_t a = uint32_t(e.key);
-            if (mVersion[a] + mVersion[e.b] != e.versions) continue; // stale: an end changed
+            if (e.found < mChangedAt[a] || e.found < mChangedAt[e.b]) continue; // an end changed
             double error = 0;
-            const Outcome o = collapse(a, e.b, error);
+            const Outcome o = collapse(a, e.b, mFound[e.found], error);
             if (o == Outcome::Collapsed) {
                 ++out.collapses;
                 out.maxError = std::max(out.maxError, error);
@@ -310,21 +337,23 @@ private:
         // Laid out as the 128-bit rank itself, lowest bits first (x86-64 is little-endian): the
         // heap's compares load it as it lies, where shifting the fields together was 3% of the
         // decimation's instructions.
-        uint32_t versions; ///< the ends' versions added up when pushed: they only grow
+        /// The collapse's place in mFound, which only grows: the entry is stale once an end
+        /// has changed after it was pushed (mChangedAt).
+        uint32_t found;
         uint32_t b;
         /// the error as a float (its bits order like the value: it is >= 0), then the lower
         /// end: the heap's top is the smallest error, ties to the lowest ends, one order every run
         uint64_t key;
         /// The heap's order: the smallest error first, ties to the lowest ends (and, for one
-        /// edge pushed twice with one error, the older versions, which are stale by then):
-        /// key << 64 | b << 32 | versions.
+        /// edge pushed twice with one error, the older push, which is stale by then):
+        /// key << 64 | b << 32 | found.
         unsigned __int128 rank() const
         {
             unsigned __int128 r;
             std::memcpy(&r, this, sizeof r);
             return r;
         }
-        /// Pops after o, the versions aside.
+        /// Pops after o, the push aside.
         bool after(const Entry& o) const { return key != o.key ? key > o.key : b > o.b; }
     };
     static_assert(sizeof(Entry) == 16 && offsetof(Entry, b) == 4 && offsetof(Entry, key) == 8 &&
@@ -337,8 +366,7 @@ private:
         RefusedUnstable, ///< by what lies outside the fans too: tried again next time
     };
 
-    Vec3d& point(uint32_t v) { return mS.points[mGlobal[v]]; }
-    const Vec3d& point(uint32_t v) const { return mS.points[mGlobal[v]]; }
+    const Vec3d& point(uint32_t v) const { return mPoint[v]; }
 
     /// bestCollapse of the local edge (a, b), from the block's unpacked quadrics.
     Collapse bestCollapse(uint32_t a, uint32_t b) const
@@ -346,11 +374,11 @@ private:
         return detail::bestCollapse(mQuadric[a], point(a), mQuadric[b], point(b));
     }
 
+    /// v's triangles (its list holds only live ones: a collapse drops the two that go from
+    /// the lists of the corners across the edge, and a's is made anew).
     void aliveTris(uint32_t v, std::vector<uint32_t>& out) const
     {
-        out.clear();
-        for (uint32_t i = mStart[v]; i < mStart[v] + mCount[v]; ++i)
-            if (mTriAlive[mRefs[i]]) out.push_back(mRefs[i]);
+        out.assign(mRefs.begin() + mStart[v], mRefs.begin() + mStart[v] + mCount[v]);
     }
 
     /// v's triangles go once around it, a disc: each triangle's far side leads to the next.
@@ -378,28 +406,29 @@ private:
         return true;
     }
 
-    /// The heap entry of edge (a, b), a < b, whose collapse has this error, if it belongs in
-    /// the heap.
-    bool entry(uint32_t a, uint32_t b, double error, Entry& e) const
+    /// The heap entry of edge (a, b), a < b, whose collapse `found` would make, if it belongs
+    /// in the heap; the collapse goes into mFound when the entry goes in (add).
+    bool entry(uint32_t a, uint32_t b, const Collapse& found, Entry& e) const
     {
-        if (!(error <= mThreshold)) return false;
-        const float key = float(error);
+        if (!(found.error <= mThreshold)) return false;
+        const float key = float(found.error);
         uint32_t bits;
         std::memcpy(&bits, &key, sizeof bits);
-        e = Entry{mVersion[a] + mVersion[b], b, uint64_t(bits) << 32 | a};
+        e = Entry{uint32_t(mFound.size()), b, uint64_t(bits) << 32 | a};
         return true;
     }
 
-    /// The heap entry of edge (a, b), if it belongs in the heap.
-    bool entry(uint32_t a, uint32_t b, Entry& e) const
+    /// e into `entries` (else the heap), with the collapse it stands for: the pop finds the
+    /// point there instead of solving for it again (an edge is tried once for every time it
+    /// is pushed, as a rule, and the solve was a twentieth of the decimation).
+    void add(const Entry& e, const Collapse& found, std::vector<Entry>* entries = nullptr)
     {
-        if (!mOwn[a] || !mOwn[b]) return false;
-        if (a > b) std::swap(a, b);
-        return entry(a, b, bestCollapse(a, b).error, e);
+        mFound.push_back(found);
+        entries ? entries->push_back(e) : mHeap.push(e);
     }
 
     /// The edges in mEdges (owned ends, the lower first) that belong in the heap, into
-    /// `entries` (else the heap), their errors found a batch at a time.
+    /// `entries` (else the heap), their collapses found a batch at a time.
     void pushEdges(std::vector<Entry>* entries = nullptr)
     {
         for (size_t i = 0; i < mEdges.size(); i += CollapseBatch::kSize) {
@@ -408,12 +437,12 @@ private:
                 const auto [a, b] = mEdges[i + l];
                 mBatch.set(l, mQuadric[a], point(a), mQuadric[b], point(b));
             }
-            double errors[CollapseBatch::kSize];
-            mBatch.errors(n, errors);
+            Collapse found[CollapseBatch::kSize];
+            mBatch.collapses(n, found);
             for (int l = 0; l < n; ++l) {
                 Entry e;
-                if (entry(mEdges[i + l].first, mEdges[i + l].second, errors[l], e))
-                    entries ? entries->push_back(e) : mHeap.push(e);
+                if (entry(mEdges[i + l].first, mEdges[i + l].second, found[l], e))
+                    add(e, found[l], entries);
             }
         }
     }
@@ -453,15 +482,19 @@ private:
                 if (!(mRefused[t] >> k & 1) || (p != u && q != u)) continue;
                 mRefused[t] &= uint8_t(~(1 << k));
                 const uint32_t v = p == u ? q : p;
-                if (v == a || mMark[v] == stamp) continue;
+                if (v == a || mMark[v] == stamp || !mOwn[v]) continue;
                 mMark[v] = stamp;
+                const uint32_t lo = std::min(u, v), hi = std::max(u, v);
+                const Collapse found = bestCollapse(lo, hi);
                 Entry e;
-                if (entry(u, v, e) && popsAfterLast(e)) mHeap.push(e);
+                if (entry(lo, hi, found, e) && popsAfterLast(e)) add(e, found);
             }
         }
     }
 
-    Outcome collapse(uint32_t a, uint32_t b, double& error)
+    /// Tries the collapse of edge (a, b) that `col` says (bestCollapse: a copy, as mFound
+    /// grows below).
+    Outcome collapse(uint32_t a, uint32_t b, const Collapse col, double& error)
     {
         aliveTris(a, mTa);
         aliveTris(b, mTb);
@@ -474,7 +507,6 @@ private:
             opposite[nShared++] = tri[0] ^ tri[1] ^ tri[2] ^ a ^ b;
         }
         if (nShared != 2) return Outcome::RefusedUnstable;
-        const Collapse col = bestCollapse(a, b);
         // the shapes first: they refuse most collapses (nine in ten refused), and cheaply: in
         // squares, without roots. Each remaining triangle of v's fan is (v, u, w) in its own
         // order, with only v moving, from x to the new point q.
@@ -520,10 +552,8 @@ private:
             }
         if (common != 2) return refuse(a, b, shared);     // the link condition
         if (na + nb - 4 < 3) return refuse(a, b, shared); // a's fan after the collapse
-        for (uint32_t c : opposite) { // each loses one triangle (c's fan: not remembered)
-            aliveTris(c, mTc);
-            if (mTc.size() - 1 < (mOwn[c] ? 3u : 2u)) return Outcome::RefusedUnstable;
-        }
+        for (uint32_t c : opposite) // each loses one triangle (c's fan: not remembered)
+            if (mCount[c] - 1 < (mOwn[c] ? 3u : 2u)) return Outcome::RefusedUnstable;
         // how far the surface moves: the drift bound, and the fans for withinStep
         const bool stepBound = mMaxStep < std::numeric_limits<double>::infinity();
         double drift = 0; // see State::drift
@@ -562,9 +592,16 @@ private:
         mS.quadrics[mGlobal[a]] = PackedQuadric::pack(
             mergedQuadric(mQuadric[a], point(a), mQuadric[b], point(b), col.point));
         mQuadric[a] = mS.quadrics[mGlobal[a]].unpack(); // as the state keeps it
-        point(a) = col.point;
+        mPoint[a] = mS.points[mGlobal[a]] = col.point;
         mS.drift[mGlobal[a]] = float(drift);
         mTriAlive[shared[0]] = mTriAlive[shared[1]] = 0;
+        for (uint32_t c : opposite) { // the dead out of c's list, the order kept
+            uint32_t* list = &mRefs[mStart[c]];
+            uint32_t kept = 0;
+            for (uint32_t i = 0; i < mCount[c]; ++i)
+                if (mTriAlive[list[i]]) list[kept++] = list[i];
+            mCount[c] = kept;
+        }
         const uint32_t start = uint32_t(mRefs.size());
         for (uint32_t t : mTa)
             if (t != shared[0] && t != shared[1]) mRefs.push_back(t);
@@ -576,12 +613,12 @@ private:
         }
         mStart[a] = start, mCount[a] = uint32_t(mRefs.size()) - start;
         mCount[b] = 0;
-        ++mVersion[a], ++mVersion[b], mOwn[b] = 0;
-        aliveTris(a, mTa);
+        mChangedAt[a] = mChangedAt[b] = uint32_t(mFound.size()), mOwn[b] = 0;
         const uint32_t mark = ++mStamp;
         mRing.clear();
         mEdges.clear();
-        for (uint32_t t : mTa) {
+        for (uint32_t i = mStart[a]; i < mStart[a] + mCount[a]; ++i) {
+            const uint32_t t = mRefs[i];
             for (uint32_t w : mTris[t])
                 if (w != a && mMark[w] != mark) {
                     mMark[w] = mark, mRing.push_back(w);
@@ -603,18 +640,24 @@ private:
     std::vector<uint8_t> mRefused;               ///< State::refused, per local triangle
     std::vector<uint32_t> mStart, mCount, mRefs; ///< vertex -> its triangles (lists grow at
                                                  ///< the end of mRefs as vertices merge)
-    std::vector<uint32_t> mVersion;              ///< bumped when a vertex moves or goes
+    /// per vertex: mFound's size when it last moved or went (entries found before are stale)
+    std::vector<uint32_t> mChangedAt;
+    /// the collapses of the entries pushed, in the order pushed (Entry::found)
+    std::vector<Collapse> mFound;
     /// per vertex: it may have an edge remembered as refused (0: it has none; touch skips it)
     std::vector<uint8_t> mMayRefuse;
     /// State::quadrics unpacked, per local vertex: each edge's error reads two, and unpacking
     /// them was a seventh of the quadric work (only owned vertices change, here and in State).
     std::vector<Quadric> mQuadric;
+    /// State::points per local vertex, the same way (read through the mesh's numbers, they
+    /// were an extra load and a cache miss at every corner the guards look at).
+    std::vector<Vec3d> mPoint;
     RankHeap<Entry> mHeap;
     double mThreshold = 0, mMaxDrift = 0, mMaxStep = 0;
     StepGuard mStep{0};          ///< the fans of the collapse being tried (DecimateTarget::maxStep)
     std::vector<uint32_t> mMark; ///< per vertex: the stamp of the last neighbour walk it was in
     uint32_t mStamp = 0;
-    std::vector<uint32_t> mTa, mTb, mTc; // scratch
+    std::vector<uint32_t> mTa, mTb; // scratch
     /// The remaining triangles of the collapse being tried, for all its guards: a's fan, then
     /// b's from mSecondFan.
     std::vector<FanTriangle> mFan;

@@ -1,6 +1,7 @@
 // CollapseBatchTest.cc - several edges' collapses at once (post/CollapseBatch) against one at a
-// time: the same bits in every lane, on both register widths, for quadrics of random planes and
-// for the cases the selects decide (no planes, a single plane, parallel planes, a zero weight).
+// time: the same bits in every lane (errors and points), on both register widths, for quadrics of
+// random planes and for the cases the selects decide (no planes, a single plane, parallel planes, a
+// zero weight).
 #include "post/CollapseBatch.h"
 
 #include <fluidsurf/Error.h>
@@ -58,20 +59,29 @@ TEST(CollapseBatch, EveryLaneGivesTheBitsOfOneEdgeAlone)
             CollapseBatch batch;
             const int n = 1 + round % CollapseBatch::kSize;
             double expected[CollapseBatch::kSize];
+            Vec3d expectedPoint[CollapseBatch::kSize];
             for (int l = 0; l < n; ++l) {
                 const int kind = (round + l) % 7; // 0: no planes; 1, 2: parallel; else random
                 const End a = randomEnd(rng, kind == 0 ? 0 : 1 + (round + 3 * l) % 6, kind <= 2);
                 End b = randomEnd(rng, kind == 0 ? 0 : 1 + (round + l) % 5, kind <= 2);
                 if (kind == 3) b.q.w = 0; // weightless: error 0 by the select
                 batch.set(l, a.q, a.p, b.q, b.p);
-                expected[l] = bestCollapse(a.q, a.p, b.q, b.p).error;
+                const auto one = bestCollapse(a.q, a.p, b.q, b.p);
+                expected[l] = one.error, expectedPoint[l] = one.point;
             }
             double got[CollapseBatch::kSize];
             batch.errors(n, got, width);
+            fluidsurf::post::detail::Collapse found[CollapseBatch::kSize];
+            batch.collapses(n, found, width); // the points too (the decimation's heap keeps them)
             for (int l = 0; l < n; ++l) {
                 EXPECT_TRUE(sameBits(got[l], expected[l]))
                     << "width " << width << ", round " << round << ", lane " << l << ": " << got[l]
                     << " against " << expected[l];
+                EXPECT_TRUE(sameBits(found[l].error, expected[l])) << round << ", lane " << l;
+                for (int k = 0; k < 3; ++k)
+                    EXPECT_TRUE(sameBits(found[l].point[k], expectedPoint[l][k]))
+                        << "width " << width << ", round " << round << ", lane " << l << ", axis "
+                        << k << ": " << found[l].point[k] << " against " << expectedPoint[l][k];
                 ++edges, errorsAboveZero += expected[l] > 0;
             }
         }
@@ -109,4 +119,6 @@ TEST(CollapseBatch, RefusesFourLanesWithoutAvx2)
     else
         EXPECT_THROW(batch.errors(4, e, 4), fluidsurf::ValueError);
     EXPECT_THROW(batch.errors(4, e, 3), fluidsurf::ValueError);
+    fluidsurf::post::detail::Collapse c[CollapseBatch::kSize];
+    EXPECT_THROW(batch.collapses(4, c, 3), fluidsurf::ValueError);
 }
