@@ -388,8 +388,8 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
     size_t idle = 0;               // passes in a row without a collapse
     double rankFactor = 3;         // collapses under the threshold per collapse made
     std::vector<uint32_t> valence; // each point's triangles
-    std::vector<uint8_t> touched(s.points.size(), 0); // see BlockResult::touched
-    tbb::enumerable_thread_specific<Block> blockOf;   // see Block
+    std::vector<uint8_t> touched(s.points.size(), 0);      // see BlockResult::touched
+    tbb::enumerable_thread_specific<LocalNumbers> localOf; // see Block
     for (size_t pass = 0; pass < kMaxPasses; ++pass) {
         // (here and below: what the last step freed goes back, so that it does not stay
         // resident beside the next one's arrays; see util/Memory.h)
@@ -436,8 +436,8 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
                         results[b].alive = blockStart[b + 1] - blockStart[b]; // as they are
                         continue;
                     }
-                    Block& block = blockOf.local();
-                    block.load(s, &tris[blockStart[b]], blockStart[b + 1] - blockStart[b], valence);
+                    Block block(s, &tris[blockStart[b]], blockStart[b + 1] - blockStart[b], valence,
+                                localOf.local());
                     results[b] = block.run(shares.threshold, target, budget[b]);
                 }
             });
@@ -479,7 +479,6 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
         }
     }
 
-    blockOf.clear(); // (their memory goes before compact's arrays come)
     TriangleMesh out = compact(std::move(s), kept);
     if (stats) *stats = st; // no normals: see Normals.h
     return out;

@@ -166,11 +166,10 @@ private:
 template <typename T> class RankHeap
 {
 public:
-    /// The heap of `items`, in O(n); items is left empty, with the heap's old memory.
-    void assign(std::vector<T>& items)
+    /// The heap of `items`, in O(n).
+    void assign(std::vector<T>&& items)
     {
-        mItems.swap(items);
-        items.clear();
+        mItems = std::move(items);
         for (size_t i = mItems.size() / kArity + 1; i-- > 0;)
             if (kArity * i + 1 < mItems.size()) siftDown(i, mItems[i]);
     }
@@ -228,28 +227,24 @@ private:
 };
 
 /// One block's greedy collapses (see the top of the file). Reads the points and quadrics of
-/// every vertex of its triangles, writes only those of the vertices it owns. One a thread,
-/// loaded with block after block: its arrays keep their memory. (Made and freed a block at a
-/// time, they went back to the system whenever a thread's heap had nothing else in it, as in
-/// `fluidsurf post` of a mesh file, and every block faulted its pages in anew: 130,000 page
-/// faults, a tenth of the decimation's time, on the 1.7M-particle frame's raw mesh.)
+/// every vertex of its triangles, writes only those of the vertices it owns.
 class Block
 {
 public:
-    /// The block of the n triangles tris[0, n) of s.
-    void load(State& s, const uint32_t* tris, size_t n, const std::vector<uint32_t>& valence)
+    /// `local`: one per thread.
+    Block(State& s, const uint32_t* tris, size_t n, const std::vector<uint32_t>& valence,
+          LocalNumbers& local)
+        : mS(s), mSlots(tris)
     {
-        mS = &s, mSlots = tris;
         // local vertices in the order they first appear in the block's triangles (which are in
         // mesh order): the same numbering every run, without a sort
         mTris.resize(n);
         mRefused.resize(n);
-        mGlobal.clear();
-        mLocal.reset(n);
+        local.reset(n);
         for (size_t i = 0; i < n; ++i) {
             mRefused[i] = s.refused[tris[i]];
             for (int k = 0; k < 3; ++k)
-                mTris[i][k] = mLocal.number(s.triangles[tris[i]][k], mGlobal);
+                mTris[i][k] = local.number(s.triangles[tris[i]][k], mGlobal);
         }
         const size_t nv = mGlobal.size();
         mTriAlive.assign(n, 1);
@@ -263,10 +258,10 @@ public:
         for (size_t v = 0; v < nv; ++v)
             mCount[v] = mStart[v + 1] - mStart[v];
         mRefs.resize(3 * n);
-        mFill.assign(mStart.begin(), mStart.end() - 1);
+        std::vector<uint32_t> fill(mStart.begin(), mStart.end() - 1);
         for (size_t t = 0; t < n; ++t)
             for (uint32_t v : mTris[t])
-                mRefs[mFill[v]++] = uint32_t(t);
+                mRefs[fill[v]++] = uint32_t(t);
         mStart.pop_back();
         mOwn.resize(nv);
         mMark.assign(nv, 0);
@@ -291,8 +286,9 @@ public:
     {
         BlockResult out;
         mThreshold = threshold, mMaxDrift = target.maxDrift, mMaxStep = target.maxStep;
-        mStep.setBound(mMaxStep);
-        mEntries.clear(); // made a heap at once: cheaper than pushing one by one
+        mStep = StepGuard(mMaxStep);
+        std::vector<Entry> entries; // made a heap at once: cheaper than pushing one by one
+        entries.reserve(3 * mTris.size() / 2);
         mFound.clear();
         mFound.reserve(3 * mTris.size() / 2 + 8 * std::min(budget, mTris.size()));
         mEdges.clear();
@@ -302,8 +298,8 @@ public:
                 if (a < b && !(mRefused[t] >> k & 1) && mOwn[a] && mOwn[b])
                     mEdges.push_back({a, b});
             }
-        pushEdges(&mEntries);
-        mHeap.assign(mEntries);
+        pushEdges(&entries);
+        mHeap.assign(std::move(entries));
         mPopped = false;
         while (!mHeap.empty() && out.collapses < budget) {
             const Entry e = mHeap.top();
@@ -316,7 +312,7 @@ public:
             if (o == Outcome::Collapsed) {
                 ++out.collapses;
                 out.maxError = std::max(out.maxError, error);
-                out.maxDrift = std::max(out.maxDrift, double(mS->drift[mGlobal[a]]));
+                out.maxDrift = std::max(out.maxDrift, double(mS.drift[mGlobal[a]]));
                 for (uint32_t w : mRing) // after collapse(): touch() walks with mMark too
                     touch(w, a, out.touched);
             } else {
@@ -328,9 +324,9 @@ public:
         for (size_t t = 0; t < mTris.size(); ++t)
             if (mTriAlive[t]) {
                 const uint32_t slot = mSlots[out.alive++];
-                mS->triangles[slot] = {mGlobal[mTris[t][0]], mGlobal[mTris[t][1]],
-                                       mGlobal[mTris[t][2]]};
-                mS->refused[slot] = mRefused[t];
+                mS.triangles[slot] = {mGlobal[mTris[t][0]], mGlobal[mTris[t][1]],
+                                      mGlobal[mTris[t][2]]};
+                mS.refused[slot] = mRefused[t];
             }
         return out;
     }
@@ -571,7 +567,7 @@ private:
         // (a plane of the old fan is as far off the input as its corners may be)
         auto far = [&](const Tri& t) {
             return double(std::max(
-                {mS->drift[mGlobal[t[0]]], mS->drift[mGlobal[t[1]]], mS->drift[mGlobal[t[2]]]}));
+                {mS.drift[mGlobal[t[0]]], mS.drift[mGlobal[t[1]]], mS.drift[mGlobal[t[2]]]}));
         };
         auto driftTo = [&](const Vec3d& x, const Vec3d& n0, const Tri& t) {
             const double l0 = n0.length();
@@ -600,11 +596,11 @@ private:
         error = col.error;
 
         // commit: b merges into a
-        mS->quadrics[mGlobal[a]] = PackedQuadric::pack(
+        mS.quadrics[mGlobal[a]] = PackedQuadric::pack(
             mergedQuadric(mQuadric[a], point(a), mQuadric[b], point(b), col.point));
-        mQuadric[a] = mS->quadrics[mGlobal[a]].unpack(); // as the state keeps it
-        mPoint[a] = mS->points[mGlobal[a]] = col.point;
-        mS->drift[mGlobal[a]] = float(drift);
+        mQuadric[a] = mS.quadrics[mGlobal[a]].unpack(); // as the state keeps it
+        mPoint[a] = mS.points[mGlobal[a]] = col.point;
+        mS.drift[mGlobal[a]] = float(drift);
         mTriAlive[shared[0]] = mTriAlive[shared[1]] = 0;
         for (uint32_t c : opposite) { // the dead out of c's list, the order kept
             uint32_t* list = &mRefs[mStart[c]];
@@ -643,11 +639,8 @@ private:
         return Outcome::Collapsed;
     }
 
-    State* mS = nullptr;
-    const uint32_t* mSlots = nullptr; ///< the block's triangles in State
-    LocalNumbers mLocal;
-    std::vector<uint32_t> mFill;   ///< load's cursors
-    std::vector<Entry> mEntries;   ///< run's first heap, before it is one
+    State& mS;
+    const uint32_t* mSlots;        ///< the block's triangles in State
     std::vector<uint32_t> mGlobal; ///< local vertex -> mesh vertex
     std::vector<Tri> mTris;        ///< in local vertices
     std::vector<uint8_t> mTriAlive, mOwn;

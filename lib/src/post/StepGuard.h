@@ -40,8 +40,6 @@ public:
     using Ids = std::array<uint32_t, 3>;
 
     explicit StepGuard(double bound) : mBound(bound) {}
-    /// Another bound, the fans' memory kept.
-    void setBound(double bound) { mBound = bound; }
 
     /// A collapse of an edge to the point q; gone[g] = (x, u, w, n = (u - x) x (w - x)) for the
     /// two triangles that go, ids their corners, across their corners across the edge.

@@ -33,7 +33,7 @@ TEST(RankHeap, PopsInRankOrderThroughPushesAndPops)
             reference.insert(it.rank());
         }
         RankHeap<Item> heap;
-        heap.assign(items);
+        heap.assign(std::move(items));
         size_t popped = 0, wrong = 0;
         for (int step = 0; step < 20000; ++step) {
             if (rng() % 3 == 0 || heap.empty()) { // a push a third of the time
