@@ -1,7 +1,8 @@
 // Decimate.h - parallel quadric-error decimation (thesis §5.2.1, Garland and Heckbert 1997):
-// edge collapses, cheapest first, each to the point of least quadric error, guarded so that a
-// closed manifold surface stays closed, manifold, oriented and free of flipped or sliver
-// triangles. The same result for any thread count.
+// edge collapses, cheapest first, each to the point of least quadric error (or, where that point
+// would leave a sliver or a fold, to the edge's middle or an end), guarded so that a closed
+// manifold surface stays closed, manifold, oriented and free of flipped or sliver triangles.
+// The same result for any thread count.
 #pragma once
 
 #include <fluidsurf/Mesh.h>

@@ -3,9 +3,9 @@
 // Only Decimate.cc includes it (and RankHeapTest, for the heap).
 //
 // Each collapse moves the edge to the point of least quadric error (not to one of its ends, as
-// OpenMesh does): the error is measured against the original triangles' planes, which averages
-// out the particles' bumps on flat fluid. Where that point would leave a sliver or a fold (the
-// shape guards below), the edge's middle is tried, then either end, and the first that keeps
+// OpenMesh does, as a rule): the error is measured against the original triangles' planes, which
+// averages out the particles' bumps on flat fluid. Where that point would leave a sliver or a fold
+// (the shape guards below), the edge's middle is tried, then either end, and the first that keeps
 // the shapes is taken, if its own error is within the pass' threshold: marching cubes' slivers
 // around an edge refused the quadric's point for most edges late in the decimation (2.3M
 // thin-angle refusals against 1.6M collapses on the 1.7M-particle frame), and each refused try
