@@ -3,6 +3,7 @@
 
 #include "field/FieldValue.h"
 #include "field/FieldValueWide.h"
+#include "util/Floor.h"
 #include "util/Lanes.h"
 
 #include <fluidsurf/Error.h>
@@ -32,13 +33,6 @@ using LeafT = openvdb::FloatTree::LeafNodeType;
 inline Lanes load(const float* p)
 {
     return util::loadLanes(p);
-}
-
-// floor for values well inside the int range; std::floor is a libm call on baseline x86-64.
-inline int floorInt(double v)
-{
-    const int i = int(v);
-    return i - (v < i);
 }
 
 /// Particles near one leaf, in leaf-local coordinates, counting-sorted into columns (bins in x
@@ -92,12 +86,13 @@ struct Kernel
     int slabCount() const { return LeafT::DIM + 2 * reach; }
     int slabOf(double local) const
     {
-        return std::clamp(floorInt(local * invDx) + reach, 0, slabCount() - 1);
+        return std::clamp(int(util::floorOf(local * invDx)) + reach, 0, slabCount() - 1);
     }
     int binCount() const { return (slabCount() + binSlabs - 1) / binSlabs; }
     int binOf(double local) const
     {
-        return std::clamp(floorInt((local * invDx + reach) * invBinSlabs), 0, binCount() - 1);
+        return std::clamp(int(util::floorOf((local * invDx + reach) * invBinSlabs)), 0,
+                          binCount() - 1);
     }
 
     // Gather the particles within R of the leaf's voxel box, relative to the leaf origin, and

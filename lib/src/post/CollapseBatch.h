@@ -57,12 +57,9 @@ public:
     void set(int i, const Quadric& qa, const Vec3d& pa, const Quadric& qb, const Vec3d& pb)
     {
         static_assert(sizeof(Quadric) == kFields * sizeof(double), "a quadric: 11 doubles");
-        // field by field, in order (a00 ... w): a copy of each quadric to an array first was
-        // a third of the instructions here
-        const double a[kFields] = {qa.a00, qa.a01, qa.a02, qa.a11, qa.a12, qa.a22,
-                                   qa.b0,  qa.b1,  qa.b2,  qa.c,   qa.w};
-        const double b[kFields] = {qb.a00, qb.a01, qb.a02, qb.a11, qb.a12, qb.a22,
-                                   qb.b0,  qb.b1,  qb.b2,  qb.c,   qb.w};
+        double a[kFields], b[kFields]; // (its fields in order: a00 ... w)
+        std::memcpy(a, &qa, sizeof a);
+        std::memcpy(b, &qb, sizeof b);
         for (int k = 0; k < kFields; ++k)
             mLanes.qa[k][i] = a[k], mLanes.qb[k][i] = b[k];
         for (int k = 0; k < 3; ++k)

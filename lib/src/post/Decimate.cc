@@ -33,6 +33,7 @@
 #include "post/DecimateBlock.h"
 #include "post/Normals.h"
 
+#include "util/Floor.h"
 #include "util/MarkedNumbers.h"
 #include "util/Memory.h"
 #include "util/NthSmallest.h"
@@ -134,14 +135,6 @@ struct Blocks
     std::vector<size_t> start;
 };
 
-/// floor(v) for |v| < 2^62, exactly: std::floor is a libm call on baseline x86-64, three a
-/// triangle and pass here (a block's key is ~500 at most).
-inline int64_t floorOf(double v)
-{
-    const int64_t i = int64_t(v); // towards zero
-    return i - (double(i) > v);
-}
-
 /// A counting sort on the blocks present, numbered densely in key order: 8 bytes a triangle at
 /// the peak, where a radix sort of (key, triangle) pairs took 20 (65 MB on the 1.7M-particle
 /// frame, the peak of the whole run). Parallel over fixed chunks, each writing its triangles
@@ -162,7 +155,7 @@ Blocks sortIntoBlocks(const State& s, double side, double shift)
             const Vec3d m = (s.points[tri[0]] + s.points[tri[1]] + s.points[tri[2]]) / 3.0;
             uint32_t key = 0;
             for (int k = 0; k < kAxes; ++k)
-                key = key << kBits | (uint32_t(floorOf(m[k] / side + shift) + 512) & kMask);
+                key = key << kBits | (uint32_t(util::floorOf(m[k] / side + shift) + 512) & kMask);
             block[t] = key;
             if (keys.empty() || keys.back() != key) keys.push_back(key); // runs: few a chunk
         }

@@ -371,8 +371,10 @@ private:
 
     enum class Outcome {
         Collapsed,
-        Refused,         ///< by the ends' fans alone: remembered (State::refused)
-        RefusedUnstable, ///< by what lies outside the fans too: tried again next time
+        Refused, ///< by the ends' fans alone: remembered (State::refused)
+        /// by what lies outside the fans too, or dearer than the pass' threshold at the point
+        /// taken: tried again next time
+        RefusedUnstable,
     };
 
     const Vec3d& point(uint32_t v) const { return mPoint[v]; }
@@ -391,8 +393,8 @@ private:
     }
 
     /// v's triangles go once around it, a disc: each triangle's far side leads to the next.
-    /// Each corner after v is looked up by a stamp (mMark, mFanAt), not searched for: the
-    /// search was a third of a block's set-up.
+    /// Each corner after v is looked up by a stamp (mMark, mFanAt), not searched for (the
+    /// search was a tenth of a block's set-up's instructions).
     bool isClosedFan(uint32_t v)
     {
         const uint32_t n = mCount[v];
@@ -435,7 +437,7 @@ private:
 
     /// e into `entries` (else the heap), with the collapse it stands for: the pop finds the
     /// point there instead of solving for it again (an edge is tried once for every time it
-    /// is pushed, as a rule, and the solve was a twentieth of the decimation).
+    /// is pushed, as a rule, and the solve was 6% of the decimation's instructions).
     void add(const Entry& e, const Collapse& found, std::vector<Entry>* entries = nullptr)
     {
         mFound.push_back(found);

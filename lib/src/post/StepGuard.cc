@@ -46,13 +46,13 @@ void StepGuard::prepare()
     }
 }
 
-inline const StepGuard::Ids& StepGuard::ids(Fan f, size_t i) const
+const StepGuard::Ids& StepGuard::ids(Fan f, size_t i) const
 {
     if (f == Fan::Old) return i < 2 ? mGoneIds[i] : mFan[i - 2].ids;
     return mFan[i].ids; // v's id stands for q's: only the others are asked
 }
 
-inline const NearTriangle& StepGuard::triangle(Fan f, size_t i)
+const NearTriangle& StepGuard::triangle(Fan f, size_t i)
 {
     const bool old = f == Fan::Old;
     NearTriangle& t = (old ? mOld : mNew)[i];
@@ -145,22 +145,18 @@ bool StepGuard::isFlat() const
 bool StepGuard::nearAll(const std::vector<Sample>& samples, Fan f, double bound2)
 {
     const size_t n = size(f);
-    if (mHinted.size() < n) mHinted.resize(n);
     for (const Sample& s : samples) {
-        const size_t own = s.own == kNone ? n : s.own;
-        if (own < n && triangle(f, own).within(s.q, bound2)) continue;
-        // those by the hint first; which they are is found once (found again for the rest, it
-        // was a tenth of the guard's instructions)
-        bool near = false;
-        for (size_t i = 0; i < n && !near; ++i) {
+        auto byHint = [&](size_t i) {
             const Ids& c = ids(f, i);
-            mHinted[i] = s.hint != kNone && (c[0] == s.hint || c[1] == s.hint || c[2] == s.hint);
-            near = i != own && mHinted[i] && triangle(f, i).within(s.q, bound2);
-        }
-        // the rest from the own one on, round
-        for (size_t j = 0, i = own < n ? own + 1 : 0; j < n && !near; ++j, ++i) {
-            if (i == n) i = 0;
-            near = i != own && !mHinted[i] && triangle(f, i).within(s.q, bound2);
+            return s.hint != kNone && (c[0] == s.hint || c[1] == s.hint || c[2] == s.hint);
+        };
+        const size_t own = s.own == kNone ? n : s.own;
+        bool near = own < n && triangle(f, own).within(s.q, bound2);
+        for (size_t i = 0; i < n && !near; ++i)
+            near = i != own && byHint(i) && triangle(f, i).within(s.q, bound2);
+        for (size_t j = 0; j < n && !near; ++j) { // from the own one on, round
+            const size_t i = own < n ? (own + 1 + j) % n : j;
+            near = i != own && !byHint(i) && triangle(f, i).within(s.q, bound2);
         }
         if (!near) return false;
     }

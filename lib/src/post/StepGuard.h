@@ -92,8 +92,7 @@ private:
     /// arrays only grow (NearTriangle's construction is the work put off).
     std::vector<NearTriangle> mOld, mNew;
     std::vector<uint8_t> mReady[2];
-    std::vector<Sample> mFar;     ///< points to find near a fan
-    std::vector<uint8_t> mHinted; ///< nearAll's sample: the triangles by its ring vertex
+    std::vector<Sample> mFar; ///< points to find near a fan
 };
 
 } // namespace post
