@@ -11,7 +11,7 @@ namespace fluidsurf {
 namespace backend {
 
 Classified classifyOnCpu(const Particles& particles, const Params& params, Context& ctx, Band& out,
-                         bool withNormals)
+                         classify::Outputs outputs)
 {
     Classified c;
     {
@@ -22,7 +22,7 @@ Classified classifyOnCpu(const Particles& particles, const Params& params, Conte
             particles.positions.size(), cellSize, ctx);
     }
     const auto t = ctx.scope("classify");
-    c.classes = classify::classifyParticles(c.index, params, ctx, withNormals);
+    c.classes = classify::classifyParticles(c.index, params, ctx, outputs);
     out.interior = c.classes.interior, out.surface = c.classes.surface;
     out.splash = c.classes.splash, out.isolated = c.classes.isolated;
     out.isolatedParticles.clear();
@@ -55,12 +55,8 @@ public:
     bool narrowBand(const Particles& particles, const Params& params, const Level& level,
                     double width, Context& ctx, Band& out) override
     {
+        // the classes alone: the band and the field's particles need nothing else
         Classified c = classifyOnCpu(particles, params, ctx, out);
-        // only the classes go on (to the band and the field's particles): the neighbour counts
-        // and colour fields (12 bytes a particle) are given back before the band's values
-        decltype(c.classes.neighbours)().swap(c.classes.neighbours);
-        decltype(c.classes.colorField)().swap(c.classes.colorField);
-        decltype(c.classes.colorGradient)().swap(c.classes.colorGradient);
         {
             const auto t = ctx.scope("narrow band");
             const openvdb::MaskTree::Ptr band =

@@ -17,9 +17,10 @@ struct Classified
 };
 
 /// "neighbors" and "classify" (timed in ctx); class counts and the isolated particles (input
-/// indices, ascending, unless kept) go into out.
+/// indices, ascending, unless kept) go into out. `outputs`: what the classification holds
+/// besides the classes.
 Classified classifyOnCpu(const Particles& particles, const Params& params, Context& ctx, Band& out,
-                         bool withNormals = false);
+                         classify::Outputs outputs = {});
 
 /// The index without its isolated particles (they take no part in the field), unless kept.
 /// c is left empty: its index and classes are given back before the field is evaluated.

@@ -204,7 +204,7 @@ struct CellWork
     double h, uniformVolume;
     float h2;
     ClassRule rule;
-    bool withNormals;
+    bool withSums, withNormals;
     Classification& out;
 };
 
@@ -246,9 +246,11 @@ __attribute__((always_inline)) inline void classifyCells(const CellWork& w, size
             // particles of a real fluid come within kSameSpot * h of each other, so
             // real frames are computed particle by particle as before.
             if (i > b && sameSpot(p, index.positions[computed], float(h * kSameSpot))) {
-                out.neighbours[i] = out.neighbours[computed];
-                out.colorField[i] = out.colorField[computed];
-                out.colorGradient[i] = out.colorGradient[computed];
+                if (w.withSums) {
+                    out.neighbours[i] = out.neighbours[computed];
+                    out.colorField[i] = out.colorField[computed];
+                    out.colorGradient[i] = out.colorGradient[computed];
+                }
                 out.classes[i] = out.classes[computed];
                 if (w.withNormals) out.normals[i] = out.normals[computed];
                 continue;
@@ -261,9 +263,11 @@ __attribute__((always_inline)) inline void classifyCells(const CellWork& w, size
             laneSums<V, N>(nb, live.data(), nLive, px, py, pz, h2, sums);
             const ParticleSums ps =
                 classifyLanes(sums.count, sums.cf, sums.gx, sums.gy, sums.gz, w.rule);
-            out.neighbours[i] = ps.neighbours;
-            out.colorField[i] = ps.colorField;
-            out.colorGradient[i] = ps.gradient;
+            if (w.withSums) {
+                out.neighbours[i] = ps.neighbours;
+                out.colorField[i] = ps.colorField;
+                out.colorGradient[i] = ps.gradient;
+            }
             out.classes[i] = ps.cls;
             if (w.withNormals && isSurface(ps.cls)) {
                 // The gradient's sum points into the fluid (d = x_j - x_i).
@@ -323,7 +327,7 @@ int classifyRegisterLanes()
 }
 
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
-                                 Context& ctx, bool withNormals, int registerLanes)
+                                 Context& ctx, Outputs outputs, int registerLanes)
 {
     if (registerLanes != util::kLanes && registerLanes != util::kWideLanes)
         throw ValueError("classifyParticles: registerLanes must be 4 or 8");
@@ -333,13 +337,16 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
     Classification out;
     // each written by the loop below, every particle's, where its cell is done
     out.classes.resize(n);
-    out.neighbours.resize(n);
-    out.colorField.resize(n);
-    out.colorGradient.resize(n);
-    if (withNormals) out.normals.assign(n, Vec3f(0, 0, 0));
+    if (outputs.sums) {
+        out.neighbours.resize(n);
+        out.colorField.resize(n);
+        out.colorGradient.resize(n);
+    }
+    if (outputs.normals) out.normals.assign(n, Vec3f(0, 0, 0));
     const KernelConstants k = kernelConstants(params);
     static_assert(kClassLanes == util::kWideLanes && kClassLanes == 2 * util::kLanes);
-    const CellWork work{index, k.h, k.uniformVolume, k.h2, classRule(params), withNormals, out};
+    const CellWork work{
+        index, k.h, k.uniformVolume, k.h2, classRule(params), outputs.sums, outputs.normals, out};
     const auto cellsOf = registerLanes == util::kWideLanes ? wideCells : narrowCells;
     tbb::parallel_for(tbb::blocked_range<size_t>(0, index.cellCount(), 16),
                       [&](const tbb::blocked_range<size_t>& cells) {

@@ -36,7 +36,8 @@ inline bool isSurface(uint8_t c)
 struct Classification
 {
     // (not zeroed first: classifyParticles writes every particle's, on all threads)
-    util::NoInitVector<uint8_t> classes;     ///< per particle, in the index's cell order
+    util::NoInitVector<uint8_t> classes; ///< per particle, in the index's cell order
+    /// The sums, per particle (only with Outputs::sums; else empty)
     util::NoInitVector<uint32_t> neighbours; ///< other particles closer than h
     util::NoInitVector<float> colorField;    ///< cf_i as above
     util::NoInitVector<float> colorGradient; ///< |grad cf_i| * h (MCG03's surface normal length)
@@ -66,13 +67,22 @@ ClassRule classRule(const Params& params);
 /// either way, and the device's.
 int classifyRegisterLanes();
 
+/// What classifyParticles fills besides the classes. The pipeline's field needs the classes
+/// alone; the sums cost 12 bytes a particle written and given back (on the 13.1M drop, 157 MB
+/// of fresh pages, a tenth of the frame's page faults).
+struct Outputs
+{
+    bool sums = false;    ///< neighbours, colorField and colorGradient (else left empty)
+    bool normals = false; ///< normals (the curvature of ch. 6)
+};
+
 /// Parallel over occupied cells (ctx.checkpoint() per range); each cell gathers its
 /// neighbourhood once.
-/// uniformRadius is used when the index has no per-particle radii. withNormals fills normals.
+/// uniformRadius is used when the index has no per-particle radii.
 /// `registerLanes`: 4, or 8 where classifyRegisterLanes() is 8 (tests run both); ValueError
 /// otherwise.
 Classification classifyParticles(const neighbors::CellIndex& index, const Params& params,
-                                 Context& ctx, bool withNormals = false,
+                                 Context& ctx, Outputs outputs = {},
                                  int registerLanes = classifyRegisterLanes());
 
 /// The marks (index order) of the particles that are not isolated: those the field takes.

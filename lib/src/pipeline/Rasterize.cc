@@ -104,7 +104,9 @@ struct Run
     {
         RasterizeStats& stats = result.stats;
         backend::Band band;
-        backend::Classified c = backend::classifyOnCpu(particles, params, ctx, band, true);
+        // the sums for the neighbour counts (the level map), the normals for the curvature
+        backend::Classified c =
+            backend::classifyOnCpu(particles, params, ctx, band, classify::Outputs{true, true});
         take(band);
         std::vector<float> kappa;
         {

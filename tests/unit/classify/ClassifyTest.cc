@@ -21,7 +21,8 @@ classify::Classification classifyScene(const ParticleSet& ps, const Params& p,
     Context ctx;
     index =
         neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength, ctx);
-    return classify::classifyParticles(index, p, ctx, withNormals, registerLanes);
+    return classify::classifyParticles(index, p, ctx, classify::Outputs{true, withNormals},
+                                       registerLanes);
 }
 
 /// Uniform in [-0.5, 0.5) from a 64-bit LCG (the same numbers on every platform).
@@ -97,7 +98,8 @@ TEST(Classify, NormalsPointOutOfTheBlockAndFollowASelection)
     Context ctx;
     const neighbors::CellIndex index =
         neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), p.smoothingLength, ctx);
-    const classify::Classification c = classify::classifyParticles(index, p, ctx, true);
+    const classify::Classification c =
+        classify::classifyParticles(index, p, ctx, classify::Outputs{true, true});
     ASSERT_EQ(c.normals.size(), index.size());
     size_t faceCentres = 0;
     for (size_t i = 0; i < index.size(); ++i) {
@@ -224,10 +226,12 @@ TEST(Classify, ColorFieldAndGradientMatchBruteForceInEitherRegisterWidth)
     EXPECT_EQ(checked, ps.size());
     Context ctx;
     if (classify::classifyRegisterLanes() != 8) {
-        EXPECT_THROW(classify::classifyParticles(index, p, ctx, false, 8), ValueError);
+        EXPECT_THROW(classify::classifyParticles(index, p, ctx, classify::Outputs{}, 8),
+                     ValueError);
         GTEST_SKIP() << "no AVX2 here: only the SSE registers were checked";
     }
-    const classify::Classification eight = classify::classifyParticles(index, p, ctx, true, 8);
+    const classify::Classification eight =
+        classify::classifyParticles(index, p, ctx, classify::Outputs{true, true}, 8);
     for (size_t i = 0; i < index.size(); ++i) {
         ASSERT_EQ(four.neighbours[i], eight.neighbours[i]) << i;
         ASSERT_EQ(four.classes[i], eight.classes[i]) << i;
@@ -236,7 +240,7 @@ TEST(Classify, ColorFieldAndGradientMatchBruteForceInEitherRegisterWidth)
             << i;
         ASSERT_EQ(std::memcmp(&four.normals[i], &eight.normals[i], sizeof(Vec3f)), 0) << i;
     }
-    EXPECT_THROW(classify::classifyParticles(index, p, ctx, false, 6), ValueError);
+    EXPECT_THROW(classify::classifyParticles(index, p, ctx, classify::Outputs{}, 6), ValueError);
 }
 
 namespace {
@@ -305,7 +309,16 @@ TEST(Classify, GroupsOutOfReachAreSkippedWithoutChangingABit)
                                       ps.size(), p.smoothingLength, ctx);
         for (const int lanes : {4, classify::classifyRegisterLanes()}) {
             const classify::Classification c =
-                classify::classifyParticles(index, p, ctx, false, lanes);
+                classify::classifyParticles(index, p, ctx, classify::Outputs{true, false}, lanes);
+            // the classes alone (the pipeline's call): the same classes, no sums kept
+            const classify::Classification bare =
+                classify::classifyParticles(index, p, ctx, classify::Outputs{}, lanes);
+            ASSERT_TRUE(bare.neighbours.empty() && bare.colorField.empty() &&
+                        bare.colorGradient.empty() && bare.normals.empty());
+            ASSERT_TRUE(std::equal(c.classes.begin(), c.classes.end(), bare.classes.begin(),
+                                   bare.classes.end()));
+            EXPECT_EQ(bare.interior, c.interior);
+            EXPECT_EQ(bare.surface, c.surface);
             size_t checked = 0, interior = 0, outOfReach = 0;
             for (size_t cell = 0; cell < index.cellCount(); ++cell)
                 for (uint32_t i = index.starts[cell]; i < index.starts[cell + 1]; ++i) {
