@@ -81,6 +81,14 @@ struct Kernel
     int binSlabs; // columns are this many slabs wide in x and y (few columns for large R)
     int lanes;    // of the sums: util::kLanes or util::kWideLanes (fieldLanes())
     double invDx = 1 / dx, invBinSlabs = 1.0 / binSlabs;
+    // The slabs a voxel reads, from reach below its own: 2 reach + 1, less the top one, whose
+    // particles never count. A voxel lies on its own slab's lower face, so the top slab starts
+    // reach dx >= R above it. With the float roundings (the voxel's z: at most 7 dx 2^-24; the
+    // difference, the squares, their sum and the scale by 1 / R^2: 2^-24 each), s^2 >= 1 -
+    // 14 2^-24 = 1 - 8.3e-7 there for reach >= 2, which addParticle counts as outside (t <=
+    // 1e-6: exact zeros, so every sum keeps its bits). A ninth fewer lanes at R = 4 dx. With
+    // reach 1 (voxels of R or more) that bound does not hold, and the slab stays.
+    int window = reach >= 2 ? 2 * reach : 2 * reach + 1;
 
     // Slabs per axis: the leaf's voxels and reach more on either side (at most 65535: uint16_t).
     int slabCount() const { return LeafT::DIM + 2 * reach; }
@@ -255,7 +263,7 @@ struct Kernel
                 int at[LeafT::DIM], m = 0;
                 for (int k = 0; k < int(LeafT::DIM); ++k) {
                     if (!mask.isOn(rowOffset + k)) continue;
-                    const uint32_t b = s.rowSlabStart[k], e = s.rowSlabStart[k + 2 * reach + 1];
+                    const uint32_t b = s.rowSlabStart[k], e = s.rowSlabStart[k + window];
                     const float vz = float(k * dx);
                     at[m] = rowOffset + k;
                     if (constants.ssp07)

@@ -4,6 +4,7 @@
 #include "mesh/CellPolygons.h"
 #include "mesh/Gradient.h"
 #include "mesh/LeafBits.h"
+#include "util/BitCount.h"
 
 #include <fluidsurf/Error.h>
 
@@ -44,9 +45,8 @@ struct EdgeWords
     {
         const unsigned w = i >> 6;
         const uint64_t below = (uint64_t(1) << (i & 63)) - 1;
-        uint32_t n = before[w] + uint32_t(__builtin_popcountll(this->axis[0][w] & below) +
-                                          __builtin_popcountll(this->axis[1][w] & below) +
-                                          __builtin_popcountll(this->axis[2][w] & below));
+        uint32_t n = before[w] + util::bitCount3(this->axis[0][w] & below, this->axis[1][w] & below,
+                                                 this->axis[2][w] & below);
         for (int a = 0; a < axis; ++a)
             n += uint32_t(this->axis[a][w] >> (i & 63) & 1);
         return n;
@@ -202,8 +202,7 @@ struct Passes
                                               : (in ^ nx.in[0]) & act & nx.active[0];
                     e.axis[0][x] = ex, e.axis[1][x] = ey, e.axis[2][x] = ez;
                     e.before[x] = n;
-                    n += uint32_t(__builtin_popcountll(ex) + __builtin_popcountll(ey) +
-                                  __builtin_popcountll(ez));
+                    n += util::bitCount3(ex, ey, ez);
                 }
                 counts[leaf.pos()] = n;
             }

@@ -37,7 +37,9 @@ TEST(CellIndex, EveryParticleIsInItsCellAndFound)
         };
         pts.emplace_back(u() * 3 - 1, u() * 2, u() * 0.5f - 7);
     }
-    pts.emplace_back(1000.f, 0.f, -7.f); // far away: sparse, not a dense box
+    // far away: sparse, not a dense box, and 10,000 cells along x, past the 1,024 that 32-bit
+    // keys hold (ManyCellsAcrossChunksAreAllFoundAndNoOthers has 80: the 32-bit keys)
+    pts.emplace_back(1000.f, 0.f, -7.f);
     const double cell = 0.1;
     Context ctx;
     const CellIndex index = buildCellIndex(pts.data(), nullptr, pts.size(), cell, ctx);
