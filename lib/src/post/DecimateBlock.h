@@ -20,8 +20,8 @@
 // - carry a vertex farther from the input than DecimateTarget::maxDrift (see State::drift);
 // - move the surface by more than DecimateTarget::maxStep, either way (post/StepGuard: the new
 //   point, the old ends and triangle middles, and the new edges' middles).
-// The shape guards run first (for each point tried): they refuse nine collapses in ten of those
-// refused, and cheaply.
+// The shape guards run first (for each point tried; post/ShapeGuard, the fans set up once for
+// all the points): they refuse nine collapses in ten of those refused, and cheaply.
 //
 // A refusal is remembered across passes (State::refused): the guards read only the two ends'
 // fans, so an edge refused once is refused again until a collapse changes a fan it reads (a
@@ -36,6 +36,7 @@
 #include "post/CollapseBatch.h"
 #include "post/Decimate.h"
 #include "post/Quadric.h"
+#include "post/ShapeGuard.h"
 #include "post/StepGuard.h"
 
 #include <fluidsurf/Mesh.h>
@@ -58,15 +59,8 @@ namespace detail {
 
 using Tri = std::array<uint32_t, 3>;
 
-constexpr double kMaxTurnDegrees = 60; ///< the most a remaining triangle's normal may turn
-constexpr size_t kMaxFan = 64;         ///< vertices with more triangles are left alone
+constexpr size_t kMaxFan = 64; ///< vertices with more triangles are left alone
 constexpr uint32_t kNone = UINT32_MAX;
-
-inline const double kMaxTurnCos = std::cos(kMaxTurnDegrees * M_PI / 180);
-inline const double kMaxTurnCos2 = kMaxTurnCos * kMaxTurnCos; ///< the turn guard compares squares
-/// sin^2 of the smallest angle the thin guard lets a new triangle have: a triangle's smallest
-/// angle (<= 60 deg) has sin^2 = |n|^2 shortest^2 / (a^2 b^2 c^2), |n| twice its area.
-inline const double kThinSin2 = std::pow(std::sin(kThinAngleDegrees * M_PI / 180), 2);
 
 /// The whole mesh between passes, points relative to the middle of its bounds.
 struct State
@@ -509,12 +503,13 @@ private:
         }
     }
 
-    /// Whether moving edge (a, b) to q keeps every remaining triangle of the two fans from
-    /// folding or turning into a sliver; mFan gets those triangles, a's then b's (from
-    /// mSecondFan). Each is (v, u, w) in its own order, with only v moving, from x to q.
-    bool keepsShapes(uint32_t a, uint32_t b, const uint32_t (&shared)[2], const Vec3d& q)
+    /// The triangles of the two fans that stay if edge (a, b) goes, into mFan (a's, then b's
+    /// from mSecondFan; each (v, u, w) in its own order, with only v moving) and into the shape
+    /// guard: found once for every point the collapse tries.
+    void fanOf(uint32_t a, uint32_t b, const uint32_t (&shared)[2])
     {
         mFan.clear();
+        mShapes.clear();
         for (const uint32_t v : {a, b}) {
             if (v == b) mSecondFan = mFan.size();
             const Vec3d x = point(v);
@@ -525,22 +520,11 @@ private:
                 const Tri ids{v, tri[(k + 1) % 3], tri[(k + 2) % 3]};
                 const Vec3d& u = point(ids[1]);
                 const Vec3d& w = point(ids[2]);
-                const Vec3d n0 = (u - x).cross(w - x), n1 = (u - q).cross(w - q);
-                const double turn = n0.dot(n1), l0 = n0.lengthSqr(), l1 = n1.lengthSqr();
-                if (!(l1 > 0) || turn < 0 || turn * turn < kMaxTurnCos2 * l0 * l1) return false;
-                // an angle under kThinAngleDegrees, smaller than it was (see kThinSin2)
-                const double uw = (u - w).lengthSqr(), uq = (u - q).lengthSqr(),
-                             wq = (w - q).lengthSqr();
-                const double sides1 = uw * uq * wq, short1 = std::min({uw, uq, wq});
-                if (l1 * short1 < kThinSin2 * sides1) {
-                    const double ux = (u - x).lengthSqr(), wx = (w - x).lengthSqr();
-                    const double sides0 = uw * ux * wx, short0 = std::min({uw, ux, wx});
-                    if (l1 * short1 * sides0 < l0 * short0 * sides1) return false;
-                }
+                const Vec3d n0 = (u - x).cross(w - x);
                 mFan.push_back({t, ids, u, w, n0});
+                mShapes.add(x, u, w, n0);
             }
         }
-        return true;
     }
 
     /// Tries the collapse of edge (a, b), col its bestCollapse (a copy, as mFound grows below;
@@ -564,9 +548,10 @@ private:
         const Vec3d& pa = point(a);
         const Vec3d& pb = point(b);
         const Vec3d tries[4] = {col.point, (pa + pb) * 0.5, pa, pb};
+        fanOf(a, b, shared);
         int taken = -1;
         for (int i = 0; i < 4 && taken < 0; ++i)
-            if (keepsShapes(a, b, shared, tries[i])) taken = i;
+            if (mShapes.keeps(tries[i])) taken = i;
         if (taken < 0) return refuse(a, b, shared);
         if (taken > 0) {
             col.point = tries[taken];
@@ -700,7 +685,8 @@ private:
     /// b's from mSecondFan.
     std::vector<FanTriangle> mFan;
     size_t mSecondFan = 0;
-    std::vector<uint32_t> mRing;                       ///< the last collapse's vertex' neighbours
+    ShapeGuard mShapes;          ///< the same triangles, for the shape guards (fanOf)
+    std::vector<uint32_t> mRing; ///< the last collapse's vertex' neighbours
     std::vector<std::pair<uint32_t, uint32_t>> mEdges; ///< edges for pushEdges
     CollapseBatch mBatch;
     Entry mLast{}; ///< the last entry popped in heap order (see touch)
