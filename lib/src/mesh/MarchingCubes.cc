@@ -11,9 +11,11 @@
 #include <openvdb/tree/LeafManager.h>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
+#include <functional>
 #include <numeric>
 #include <unordered_map>
 
@@ -460,13 +462,28 @@ struct Passes
     }
 };
 
-/// Drop vertices no triangle uses and renumber (order kept).
+/// Drop vertices no triangle uses and renumber (order kept). As a rule there are none (band
+/// completion closes every cell around a crossing edge), and the marks and their count, on all
+/// threads, are then all there is to it: serially they were a tenth of marching cubes on two
+/// cores (14 ms on the 13.1M drop), and more of it on sixteen.
 void dropUnusedVertices(TriangleMesh& mesh, Context& ctx)
 {
     std::vector<uint32_t> map(mesh.points.size(), 0);
-    for (const auto& t : mesh.triangles)
-        for (uint32_t v : t)
-            map[v] = 1;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.triangles.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i)
+                              for (uint32_t v : mesh.triangles[i]) // a mark: any order, any repeat
+                                  __atomic_store_n(&map[v], 1u, __ATOMIC_RELAXED);
+                      });
+    const size_t used = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, map.size(), 4096), size_t(0),
+        [&](const tbb::blocked_range<size_t>& r, size_t sum) {
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                sum += map[i];
+            return sum;
+        },
+        std::plus<size_t>());
+    if (used == map.size()) return;
     uint32_t n = 0;
     for (size_t i = 0; i < map.size(); ++i) {
         if (!map[i]) continue;
