@@ -6,8 +6,11 @@
 // Houdini type, defaults); then per point x y z w followed by its attribute values. Primitives and
 // anything after the points are not needed for particles and are not read.
 #include "io/ByteReader.h"
+
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
+
+#include "util/Memory.h"
 
 #include <fluidsurf/Error.h>
 
@@ -134,7 +137,7 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
     const size_t n = in.checkedCount(uint64_t(nPoints), valuesPerPoint * 4, "points");
     const uint8_t* p = in.take(n * valuesPerPoint * 4, "point data");
     ParticleSet set;
-    set.positions.resize(n);
+    util::resizeInParallel(set.positions, n);
     std::vector<std::vector<float>> floats(defs.size());
     std::vector<std::vector<int64_t>> ints(defs.size());
     for (size_t a = 0; a < defs.size(); ++a) {

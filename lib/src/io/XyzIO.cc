@@ -2,9 +2,12 @@
 // splashsurf). A text file named .xyz (the other common meaning of the extension) is
 // recognised and handed to the CSV reader instead of being misread as binary.
 #include "io/ByteReader.h"
+
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
 #include "io/TextParse.h"
+
+#include "util/Memory.h"
 
 #include <fluidsurf/Error.h>
 
@@ -55,7 +58,7 @@ ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, st
 ParticleSet readXyz(const OpenFile& file, std::string* detail)
 {
     ParticleSet set;
-    set.positions.resize(size_t(file.size() / 12));
+    util::resizeInParallel(set.positions, size_t(file.size() / 12));
     file.readAt(0, set.positions.data(), set.positions.size() * 12); // little-endian host
     if (detail) *detail = "raw float32 little-endian";
     return set;

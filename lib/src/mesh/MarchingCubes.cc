@@ -5,6 +5,7 @@
 #include "mesh/Gradient.h"
 #include "mesh/LeafBits.h"
 #include "util/BitCount.h"
+#include "util/Memory.h"
 
 #include <fluidsurf/Error.h>
 
@@ -525,10 +526,10 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
     const uint64_t vertices = passes.first.back() + passes.centreStart.back();
     if (vertices >= kMaxVertices)
         throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");
-    mesh.points.resize(vertices);
-    if (normals == RawNormals::Gradient) mesh.normals.resize(vertices);
+    util::resizeInParallel(mesh.points, vertices);
+    if (normals == RawNormals::Gradient) util::resizeInParallel(mesh.normals, vertices);
     passes.placeVertices(mesh);
-    mesh.triangles.resize(passes.triangleStart.back());
+    util::resizeInParallel(mesh.triangles, passes.triangleStart.back());
     passes.triangulate(mesh);
     // (`= {}` would keep their capacity: it is the initializer-list assignment)
     std::vector<LeafBits>().swap(passes.bits);

@@ -89,7 +89,7 @@ State makeState(TriangleMesh& mesh)
     // The input's points and normals go before the vertex -> triangle table and the quadrics
     // are allocated: 24 bytes a vertex less at the peak.
     std::vector<Vec3f>().swap(mesh.normals); // not used here (the result gets new ones)
-    s.points.resize(nv);
+    util::resizeInParallel(s.points, nv);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v)
             s.points[v] = toVec3d(mesh.points[v]) - s.middle;
@@ -350,8 +350,8 @@ TriangleMesh compact(State&& s, std::vector<uint32_t>* kept)
         if (used) index[v] = uint32_t(k - 1);
     });
     const size_t used = numbers.count();
-    out.points.resize(used);
-    if (kept) kept->resize(used);
+    util::resizeInParallel(out.points, used);
+    if (kept) util::resizeInParallel(*kept, used);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, index.size()),
                       [&](const tbb::blocked_range<size_t>& r) {
                           for (size_t v = r.begin(); v != r.end(); ++v)
@@ -361,7 +361,7 @@ TriangleMesh compact(State&& s, std::vector<uint32_t>* kept)
                               }
                       });
     std::vector<Vec3d>().swap(s.points);
-    out.triangles.resize(nt);
+    util::resizeInParallel(out.triangles, nt);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t) {
             const Tri& tri = s.triangles[t];

@@ -88,7 +88,7 @@ TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
         incident);
 
     TriangleMesh out;
-    out.points.resize(nv + ne);
+    util::resizeInParallel(out.points, nv + ne); // (every one written below)
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
             const Vec3d p = toVec3d(in.points[v]);
@@ -126,7 +126,7 @@ TriangleMesh loopSubdivide(const TriangleMesh& in, double maxMove)
                 toVec3f(bounded(ends * 0.5, ends * (3.0 / 8) + opposite / 8, maxMove));
         }
     });
-    out.triangles.resize(4 * nt);
+    util::resizeInParallel(out.triangles, 4 * nt);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nt), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t t = r.begin(); t != r.end(); ++t) {
             const auto& [a, b, c] = in.triangles[t];

@@ -6,6 +6,7 @@
 #include "post/Normals.h"
 
 #include "util/Incidence.h"
+#include "util/Memory.h"
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
@@ -50,7 +51,7 @@ void computeAngleWeightedNormals(TriangleMesh& mesh, const VertexTriangles& arou
 {
     const size_t nv = mesh.points.size();
     const auto &start = around.start, &corner = around.tris;
-    mesh.normals.resize(nv); // (each written below: not filled by one thread first)
+    util::resizeInParallel(mesh.normals, nv); // (each written below)
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
             const Vec3d p = toVec3d(mesh.points[v]);

@@ -9,6 +9,7 @@
 #include "post/Normals.h"
 
 #include "util/MarkedNumbers.h"
+#include "util/Memory.h"
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
@@ -205,7 +206,7 @@ void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Com
     // mesh.normals meanwhile: fresh buffers the size of the mesh cost more in page faults here
     // than the sums in them.
     const VertexTriangles around(mesh);
-    mesh.normals.resize(nv);
+    util::resizeInParallel(mesh.normals, nv);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
             const Vec3d n = areaNormal(mesh.points, mesh, around, v);
