@@ -6,7 +6,6 @@
 // Houdini type, defaults); then per point x y z w followed by its attribute values. Primitives and
 // anything after the points are not needed for particles and are not read.
 #include "io/ByteReader.h"
-
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
 

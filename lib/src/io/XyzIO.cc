@@ -2,7 +2,6 @@
 // splashsurf). A text file named .xyz (the other common meaning of the extension) is
 // recognised and handed to the CSV reader instead of being misread as binary.
 #include "io/ByteReader.h"
-
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
 #include "io/TextParse.h"

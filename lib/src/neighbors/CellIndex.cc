@@ -30,8 +30,8 @@ template <typename Key> struct Handle
     uint32_t index;
 };
 
-/// The sorted particles, cells and lookup of index from positions (index.origin, dims and
-/// cellSize set), with keys of type Key.
+/// index's sorted particles and its cells (not the lookup) from positions, with keys of type
+/// Key (index.origin, dims and cellSize set).
 template <typename Key>
 void sortIntoCells(CellIndex& index, const Vec3f* positions, const float* radii, size_t n,
                    Context& ctx)

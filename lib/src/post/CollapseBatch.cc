@@ -71,8 +71,7 @@ void checkLanes(int lanes)
 
 int CollapseBatch::registerLanes()
 {
-    static const bool wide = __builtin_cpu_supports("avx2");
-    return wide ? 4 : 2;
+    return util::doubleRegisterLanes();
 }
 
 void CollapseBatch::errors(int n, double* out, int lanes) const

@@ -89,8 +89,7 @@ bool narrowKeeps(const double* data, size_t stride, size_t n, const Vec3d& q)
 
 int ShapeGuard::registerLanes()
 {
-    static const bool wide = __builtin_cpu_supports("avx2");
-    return wide ? 4 : 2;
+    return util::doubleRegisterLanes();
 }
 
 void ShapeGuard::grow()

@@ -29,5 +29,13 @@ typedef float WideLanes __attribute__((vector_size(kWideLanes * sizeof(float))))
 typedef double Doubles __attribute__((vector_size(2 * sizeof(double))));
 typedef double WideDoubles __attribute__((vector_size(4 * sizeof(double))));
 
+/// Doubles a register for code that picks its width at run time: 4 (WideDoubles) where the CPU
+/// has AVX2, else 2 (Doubles).
+inline int doubleRegisterLanes()
+{
+    static const bool wide = __builtin_cpu_supports("avx2");
+    return wide ? 4 : 2;
+}
+
 } // namespace util
 } // namespace fluidsurf

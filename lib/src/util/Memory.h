@@ -82,8 +82,9 @@ void populateInParallel(uintptr_t begin, size_t bytes);
 /// faulted in on all threads first. Why: a std::vector that grows by hundreds of MB zeroes its
 /// new elements on one thread, and the page faults of that first touch, not the zeros, are its
 /// cost (157 MB of positions: 70 ms on one thread here, 34 ms with the faults on two; more so
-/// on sixteen). For the public types (ParticleSet, TriangleMesh), whose vectors have the
-/// standard allocator; the library's own arrays are NoInitVectors, filled on all threads.
+/// on sixteen). For the vectors with the standard allocator: the public types' (ParticleSet,
+/// TriangleMesh) and the few of the library's own that are handed to code taking those
+/// (decimation's points); its other large arrays are NoInitVectors, first touched on all threads.
 template <typename Vector> void resizeInParallel(Vector& v, size_t n)
 {
     using T = typename Vector::value_type;
