@@ -49,9 +49,12 @@ struct Neighbourhood
     /// order), relative to o; volumes from the radii, or uniformVolume without them. Inlined
     /// into each register width's cell loop (classifyCells): its loops over the candidates are
     /// vectorised there, an AVX register at a time where the CPU has AVX2. Each coordinate is
-    /// float(double(c) - o) whatever the width: the same operations, the same bits. (The gather
-    /// was half of classification's time on the 13.1M drop, a cell's 216 candidates serving
-    /// its 8 particles.)
+    /// c - o in float whatever the width, which is the device's float(double(c) - double(o))
+    /// bit for bit: the difference of two floats rounded once to double (53 bits) and then
+    /// to float (24) is the float difference rounded once, as 53 >= 2 * 24 + 1 (Figueroa,
+    /// "When is double rounding innocuous?", 1995). In one pass with the copy, instead of a
+    /// second pass in doubles. (The gather was half of classification's time on the 13.1M
+    /// drop, a cell's 216 candidates serving its 8 particles.)
     __attribute__((always_inline)) inline void gather(const neighbors::CellIndex& index,
                                                       neighbors::NearbyCells& cells,
                                                       const double lo[3], const double hi[3],
@@ -73,7 +76,7 @@ struct Neighbourhood
             const uint32_t first = uint32_t(r), n = uint32_t(r >> 32) - first;
             const Vec3f* p = &index.positions[first];
             for (size_t j = 0; j < n; ++j)
-                xs[k + j] = p[j].x, ys[k + j] = p[j].y, zs[k + j] = p[j].z;
+                xs[k + j] = p[j].x - o.x, ys[k + j] = p[j].y - o.y, zs[k + j] = p[j].z - o.z;
             if (!index.radii.empty()) {
                 const float* rs = &index.radii[first];
                 for (size_t j = 0; j < n; ++j) {
@@ -83,10 +86,6 @@ struct Neighbourhood
             }
             k += n;
         }
-        const double ox = o.x, oy = o.y, oz = o.z;
-        for (size_t j = 0; j < m; ++j)
-            xs[j] = float(double(xs[j]) - ox), ys[j] = float(double(ys[j]) - oy),
-            zs[j] = float(double(zs[j]) - oz);
         if (index.radii.empty()) std::fill(vs, vs + m, float(uniformVolume));
         for (; k < size; ++k)
             xs[k] = ys[k] = zs[k] = kFar, vs[k] = 0;
@@ -133,6 +132,24 @@ __attribute__((always_inline)) inline V reachOf(const float* lo, const float* hi
     return e > 0.f ? e : V{};
 }
 
+/// For each 8-bit mask, the positions of its set bits in order, and how many.
+struct SetBits
+{
+    int32_t positions[256][8];
+    uint8_t count[256];
+};
+
+constexpr SetBits setBits()
+{
+    SetBits t{};
+    for (unsigned m = 0; m < 256; ++m)
+        for (int l = 0; l < 8; ++l)
+            if (m >> l & 1) t.positions[m][t.count[m]++] = l;
+    return t;
+}
+
+constexpr SetBits kSetBits = setBits();
+
 /// The groups of nb that may hold a candidate closer than h to (px, py, pz), into `live`, in
 /// order; returns how many. A group left out adds nothing to the sums: each lane's d^2 =
 /// dx dx + dy dy + dz dz is at least the group's (ex ex + ey ey) + ez ez below, e the float
@@ -152,8 +169,27 @@ __attribute__((always_inline)) inline size_t liveGroups(const Neighbourhood& nb,
                 ey = reachOf<V>(&nb.y0[g], &nb.y1[g], py),
                 ez = reachOf<V>(&nb.z0[g], &nb.z1[g], pz);
         const auto near = ex * ex + ey * ey + ez * ez < h2;
-        for (int l = 0; l < kWidth; ++l)
-            live[n] = uint32_t(g + l), n += near[l] != 0; // no branch: half are live
+        if constexpr (kWidth == 8) {
+            // The live lanes' numbers from a table by their mask, all written at once (one at
+            // a time, each lane's flag extracted, this was a twentieth of classification's
+            // samples).
+            // live has room: n <= g, and nb.x0.size() is a multiple of 8. The mask is reduced
+            // with shuffles: GCC's lane-by-lane reduction extracts each lane.
+            typedef int32_t Ints __attribute__((vector_size(32)));
+            Ints flags = near & Ints{1, 2, 4, 8, 16, 32, 64, 128};
+            flags |= __builtin_shuffle(flags, Ints{4, 5, 6, 7, 0, 1, 2, 3});
+            flags |= __builtin_shuffle(flags, Ints{2, 3, 0, 1, 2, 3, 0, 1});
+            flags |= __builtin_shuffle(flags, Ints{1, 0, 1, 0, 1, 0, 1, 0});
+            const unsigned mask = unsigned(flags[0]);
+            Ints numbers;
+            std::memcpy(&numbers, kSetBits.positions[mask], sizeof numbers);
+            numbers += int32_t(g);
+            std::memcpy(&live[n], &numbers, sizeof numbers);
+            n += kSetBits.count[mask];
+        } else {
+            for (int l = 0; l < kWidth; ++l)
+                live[n] = uint32_t(g + l), n += near[l] != 0; // no branch: half are live
+        }
     }
     return n;
 }
@@ -256,8 +292,7 @@ __attribute__((always_inline)) inline void classifyCells(const CellWork& w, size
                 continue;
             }
             computed = i;
-            const float px = float(double(p.x) - o.x), py = float(double(p.y) - o.y),
-                        pz = float(double(p.z) - o.z);
+            const float px = p.x - o.x, py = p.y - o.y, pz = p.z - o.z; // (see Neighbourhood)
             const size_t nLive = liveGroups<V>(nb, px, py, pz, h2, live.data());
             LaneSums sums;
             laneSums<V, N>(nb, live.data(), nLive, px, py, pz, h2, sums);
