@@ -46,13 +46,30 @@ struct FrontierFinder
             // The scanned voxels are active in tree: read their own leaf directly, others
             // through the accessor.
             const FloatLeaf* home = tree.probeConstLeaf(leaf->origin());
-            const Directions dirs = frontierCandidates(*home, threshold, acc);
+            Directions dirs = frontierCandidates(*home, threshold, acc);
+            const Words active = activeWords(*home);
+            const std::array<Words, 3> full = fullStencils(active);
+            // Passed over a word at a time, as the loop below would pass them one by one: an
+            // edge whose 18 corners are all active (full: its far end is active, so only a sign
+            // change can have put it here, and every corner it would add is there), from
+            // either end; and, in the first round, the edges to an active neighbour at -1
+            // (their crossings are taken from the other end). Most of the band's crossings
+            // are such edges.
+            for (int axis = 0; axis < 3; ++axis) {
+                int o[3] = {0, 0, 0};
+                o[axis] = -1;
+                const Words fullBelow = shiftedWords(full[axis], o[0], o[1], o[2]);
+                const Words activeBelow = shiftedWords(active, o[0], o[1], o[2]);
+                for (int x = 0; x < 8; ++x) {
+                    dirs[2 * axis + 1][x] &= ~full[axis][x];
+                    dirs[2 * axis][x] &= ~(bothEnds ? fullBelow[x] : activeBelow[x]);
+                }
+            }
             Words keep{};
             for (const Words& d : dirs)
                 for (int x = 0; x < 8; ++x)
                     keep[x] |= d[x];
             if (keep == Words{}) continue;
-            const std::array<Words, 3> full = fullStencils(activeWords(*home));
             auto probe = [&](const openvdb::Coord& m, float& w) {
                 const openvdb::Coord l = m - leaf->origin();
                 if ((unsigned(l.x()) | unsigned(l.y()) | unsigned(l.z())) < FloatLeaf::DIM) {

@@ -19,6 +19,10 @@ using Words = std::array<uint64_t, 8>; ///< a leaf's voxels as bits: word x, bit
 /// The leaf's active voxels.
 Words activeWords(const FloatLeaf& leaf);
 
+/// w shifted so that each voxel's bit holds its neighbour's at offset (dx, dy, dz), each -1, 0
+/// or 1 (0 where that neighbour lies outside the leaf).
+Words shiftedWords(const Words& w, int dx, int dy, int dz);
+
 /// Per axis, the voxels of a leaf (active bits `active`) whose edge to the next voxel along that
 /// axis has all 18 corners of its 4 cells active within the leaf: a sign change there needs
 /// nothing added, and is passed over without probing them (a surface crosses millions of such

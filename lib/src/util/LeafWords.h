@@ -8,6 +8,8 @@
 
 #include <cstdint>
 
+#include <emmintrin.h>
+
 namespace fluidsurf {
 namespace util {
 
@@ -22,8 +24,20 @@ struct LeafWords
         for (int x = 0; x < 8; ++x)
             active[x] = mask.template getWord<uint64_t>(x), in[x] = 0;
         const float* v = leaf.buffer().data();
-        for (int i = 0; i < 512; ++i)
-            in[i >> 6] |= uint64_t(v[i] < 0) << (i & 63);
+        for (int x = 0; x < 8; ++x)
+            in[x] =
+                wordWhere(v + 64 * x, [](__m128 f) { return _mm_cmplt_ps(f, _mm_setzero_ps()); });
+    }
+
+    /// The bits of 64 values v[i] where test (4 at a time: an SSE2 compare) holds, bit i for
+    /// v[i]. A compare and a mask move for 4 values, where a value at a time took 4 operations
+    /// each (SSE2 is in every x86-64; the compare is IEEE's, NaN false, as the scalar one).
+    template <typename Test> static uint64_t wordWhere(const float* v, Test test)
+    {
+        uint64_t w = 0;
+        for (int i = 0; i < 64; i += 4)
+            w |= uint64_t(_mm_movemask_ps(test(_mm_loadu_ps(v + i)))) << i;
+        return w;
     }
 };
 constexpr uint64_t kZBelow7 = 0x7F7F7F7F7F7F7F7FULL; // bits with z < 7
