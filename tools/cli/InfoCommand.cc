@@ -74,6 +74,10 @@ void printInfo(const std::string& path, const InfoOptions& o)
         std::printf(
             "  spacing     median nearest-neighbour distance %.6g (%s particles measured)\n",
             est.medianNearest, grouped(est.sampled).c_str());
+        if (est.fromDensity)
+            std::printf("              %.6g from the density (disordered particles pair up: their "
+                        "nearest distance runs short of the spacing)\n",
+                        est.spacing);
         std::printf("  radius r    %.6g (estimate: spacing / 2; prefer the simulator's radius when "
                     "known)\n",
                     est.radius);

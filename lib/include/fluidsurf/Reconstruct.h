@@ -65,7 +65,7 @@ struct ReconstructParams
 enum class RadiusSource {
     Given,     ///< ReconstructParams::radius
     Attribute, ///< the largest value of the radius attribute (pscale)
-    Estimated  ///< half the median nearest-neighbour distance: an estimate, say so
+    Estimated  ///< half the spacing estimateSpacing finds (SpacingEstimate.h): an estimate, say so
 };
 const char* radiusSourceName(RadiusSource s); ///< "given", "attribute", "estimate"
 

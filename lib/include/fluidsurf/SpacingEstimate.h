@@ -1,6 +1,12 @@
-// SpacingEstimate.h - estimate the particle spacing of a frame from the median distance to the
-// nearest neighbour, and the radius r it implies (r = spacing / 2, DESIGN.md). Disordered SPH
-// particles pair up, so this underestimates the rest spacing (by ~20% on DualSPHysics frames):
+// SpacingEstimate.h - estimate the particle spacing of a frame, and the radius r it implies
+// (r = spacing / 2, DESIGN.md). On ordered particles (a lattice) and flat layers the spacing is
+// the median distance to the nearest neighbour. Disordered SPH particles pair up, so that
+// distance runs 15-25% under the rest spacing on DualSPHysics frames and 5-30% under on
+// SPlisHSPlasH's: there the spacing comes from the particles' SPH density (one particle per
+// spacing cubed in the bulk), which the simulators hold at rest: within 0.5% of the given
+// radius on the DualSPHysics frames of ../shared/data, within 2-7% on SPlisHSPlasH's (whose
+// nearest-neighbour halves were 15-25% and 5-28% short). Frames without a bulk (scattered or
+// random points, shells, thin sheets) keep the nearest-neighbour spacing. Still an estimate:
 // prefer the simulator's radius when known, and print an estimate as an estimate.
 #pragma once
 
@@ -11,12 +17,15 @@ namespace fluidsurf {
 struct SpacingEstimate
 {
     double medianNearest = 0; ///< median nearest-neighbour distance, world units (0: unknown)
-    double radius = 0;        ///< implied particle radius r = medianNearest / 2
+    double spacing = 0;       ///< the estimated rest spacing (see above), world units
+    bool fromDensity = false; ///< spacing from the density, not from medianNearest
+    double radius = 0;        ///< implied particle radius r = spacing / 2
     size_t sampled = 0;       ///< particles whose nearest neighbour was measured
     size_t isolated = 0;      ///< sampled particles with no neighbour in reach
 };
 
-/// Exact nearest neighbours for up to maxSamples evenly spaced particles (all if fewer).
+/// Exact nearest neighbours for up to maxSamples evenly spaced particles (all if fewer); the
+/// density (where used) of 20,000 of them.
 SpacingEstimate estimateSpacing(const ParticleSet& particles, size_t maxSamples = 200000);
 
 } // namespace fluidsurf

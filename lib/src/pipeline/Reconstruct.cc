@@ -97,7 +97,8 @@ RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute
         throw ValueError("cannot estimate the particle radius (fewer than two particles, or all "
                          "isolated); give it (-r)");
     c.radius = est.radius, c.source = RadiusSource::Estimated;
-    c.detail = "half the median nearest-neighbour distance";
+    c.detail = est.fromDensity ? "half the spacing the particles' density implies"
+                               : "half the median nearest-neighbour distance";
     return c;
 }
 
