@@ -167,7 +167,7 @@ SpacingEstimate estimateSpacing(const ParticleSet& ps, size_t maxSamples)
     est.spacing = est.medianNearest;
     // Ordered particles (a lattice) and flat layers: the nearest distance is the spacing.
     // Disordered SPH particles pair up, their nearest distance 0.72-0.85 of the rest spacing
-    // on the DualSPHysics frames (../shared/data/README.md) and 0.76-0.95 on SPlisHSPlasH's:
+    // on the DualSPHysics frames (../shared/data/README.md) and 0.72-0.95 on SPlisHSPlasH's:
     // there the density, which the simulator holds at its rest value, gives the spacing.
     const double quarter = found[found.size() / 4], threeQuarters = found[3 * found.size() / 4];
     const bool ordered = threeQuarters - quarter <= kOrdered * est.medianNearest;
