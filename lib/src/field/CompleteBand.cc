@@ -5,10 +5,13 @@
 
 #include <openvdb/tree/LeafManager.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <cmath>
 #include <memory>
+#include <vector>
 
 namespace fluidsurf {
 namespace field {
@@ -115,6 +118,30 @@ struct FrontierFinder
     }
     void join(FrontierFinder& other) { front->topologyUnion(*other.front); }
 };
+
+/// grown's active voxels, with their values, into tree (where they are inactive). The leaves
+/// they need are made first, one after the other (a leaf made in a tile takes the tile's value
+/// for its other voxels, as setValue would give them); then each leaf's voxels go in, leaves on
+/// all threads. (Voxel by voxel through an accessor, this was one thread's work: 10 ms of the
+/// first round on the 1.7M-particle frame, as long as the scan on 16 threads.)
+void insertValues(const openvdb::FloatTree& grown, openvdb::FloatTree& tree)
+{
+    openvdb::tree::LeafManager<const openvdb::FloatTree> from(grown);
+    std::vector<FloatLeaf*> to(from.leafCount());
+    {
+        openvdb::tree::ValueAccessor<openvdb::FloatTree> acc(tree);
+        for (size_t i = 0; i < to.size(); ++i)
+            to[i] = acc.touchLeaf(from.leaf(i).origin());
+    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, to.size()),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i) {
+                              const FloatLeaf& src = from.leaf(i);
+                              for (auto v = src.cbeginValueOn(); v; ++v)
+                                  to[i]->setValueOn(v.pos(), *v);
+                          }
+                      });
+}
 } // namespace
 
 size_t completeBand(openvdb::FloatTree& tree, const Level& level, const FieldEvaluator& evaluate,
@@ -137,9 +164,7 @@ size_t completeBand(openvdb::FloatTree& tree, const Level& level, const FieldEva
         auto grown = std::make_shared<openvdb::FloatTree>(*finder.front, tree.background(),
                                                           openvdb::TopologyCopy());
         evaluate(*grown);
-        openvdb::tree::ValueAccessor<openvdb::FloatTree> acc(tree);
-        for (auto v = grown->cbeginValueOn(); v; ++v)
-            acc.setValue(v.getCoord(), *v);
+        insertValues(*grown, tree);
         added += count;
         lastAdded = grown;
     }

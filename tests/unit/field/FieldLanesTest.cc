@@ -205,6 +205,56 @@ TEST(GatherField, FourAndEightLanesMatchBruteForce)
     expectLanesMatchBruteForce(ps, {}, p, "zb05");
 }
 
+// The gather reads only the particles near the box of a leaf's active voxels (GatherField.cc),
+// so a voxel's value must not depend on which other voxels of its leaf are active. Each voxel
+// of the drop's band leaves, evaluated with its whole leaf active, against the same voxel with
+// only a few of its leaf's voxels active (corners, faces, the middle, chosen per leaf): bit for
+// bit, on 4 lanes and 8, at voxel sizes that give the slab windows their shapes (a reach of 8,
+// 4 and 1 slabs: voxels of r / 2, r and 4 r).
+TEST(GatherField, AVoxelsValueDoesNotDependOnTheOtherActiveVoxelsOfItsLeaf)
+{
+    SceneParams sp;
+    sp.count = 2000;
+    const ParticleSet ps = generateScene(Scene::Drop, sp);
+    for (double voxel : {0.5, 1.0, 4.0}) {
+        Params p = Params::fromRadius(sp.radius);
+        p.voxelSize = voxel * sp.radius;
+        Context ctx;
+        const neighbors::CellIndex index = neighbors::buildCellIndex(
+            ps.positions.data(), nullptr, ps.size(), p.influenceRadius, ctx);
+        std::vector<int> lanes{4};
+        if (field::fieldLanes() == 8) lanes.push_back(8);
+        for (int l : lanes) {
+            openvdb::FloatTree whole = bandAround(ps, p.voxelSize, p.radius);
+            for (auto leaf = whole.beginLeaf(); leaf; ++leaf)
+                leaf->setValuesOn();
+            field::evaluateField(whole, index, p, p.level(), ctx, l);
+            // 1 to 4 voxels a leaf, where the field is not clamped (a clamped value would hide
+            // a missing particle), spread over the leaf
+            const float bound = float(0.99 * p.background());
+            openvdb::FloatTree few(whole.background());
+            size_t k = 0;
+            for (auto leaf = whole.cbeginLeaf(); leaf; ++leaf, ++k) {
+                std::vector<openvdb::Index> open;
+                for (auto v = leaf->cbeginValueOn(); v; ++v)
+                    if (std::abs(*v) < bound) open.push_back(v.pos());
+                for (size_t m = 0; m <= k % 4 && m < open.size(); ++m)
+                    few.setValueOn(leaf->offsetToGlobalCoord(open[(k + m * 97) % open.size()]));
+            }
+            field::evaluateField(few, index, p, p.level(), ctx, l);
+            size_t compared = 0, differ = 0;
+            for (auto it = few.cbeginValueOn(); it; ++it, ++compared) {
+                const float alone = *it, full = whole.getValue(it.getCoord());
+                if (std::memcmp(&alone, &full, sizeof alone) != 0 && differ++ < 5)
+                    ADD_FAILURE() << "voxel " << voxel << " r, " << l << " lanes: " << it.getCoord()
+                                  << " " << alone << " != " << full << " with its whole leaf";
+            }
+            EXPECT_EQ(differ, 0u) << "of " << compared;
+            EXPECT_GE(compared, 10u) << voxel; // (20 at 4 r, hundreds at the others)
+        }
+    }
+}
+
 TEST(GatherField, LanesOtherThanFourOrWhatTheCpuHasAreRefused)
 {
     Context ctx;
