@@ -159,40 +159,45 @@ void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Com
 {
     const size_t nv = mesh.points.size(), count = before.volume.size();
     ofPoint.resize(nv, kNoComponent);
-    // New points: a triangle neighbour's component, on all threads, pass after pass until no
-    // point gets one (one pass after a Loop step, one more for each further step). The steps
-    // keep each triangle within one component, so a point's component is the same whichever
-    // neighbour gives it, in whatever order.
+    // New points: a triangle neighbour's component, on all threads, pass after pass while some
+    // triangle has no corner with one (one pass after Loop steps as a rule: a triangle's
+    // children come one after the other, the corner ones first). The steps keep each triangle
+    // within one component, so a point's component is the same whichever neighbour gives it,
+    // in whatever order. A pass that finds a triangle without one and gives none: those points
+    // are not from the components before, and the volumes are left alone.
     uint32_t* const label = ofPoint.data();
     auto load = [&](uint32_t v) { return __atomic_load_n(&label[v], __ATOMIC_RELAXED); };
     const size_t nt = mesh.triangles.size();
-    for (bool more = true; more;)
-        more = tbb::parallel_reduce(
-            tbb::blocked_range<size_t>(0, nt), false,
-            [&](const tbb::blocked_range<size_t>& r, bool changed) {
+    struct Pass
+    {
+        bool changed = false, missing = false;
+    };
+    for (;;) {
+        const Pass pass = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, nt), Pass{},
+            [&](const tbb::blocked_range<size_t>& r, Pass p) {
                 for (size_t i = r.begin(); i != r.end(); ++i) {
                     const auto& t = mesh.triangles[i];
                     const uint32_t l = std::min({load(t[0]), load(t[1]), load(t[2])});
-                    if (l == kNoComponent) continue;
+                    if (l == kNoComponent) {
+                        p.missing = true;
+                        continue;
+                    }
                     for (uint32_t v : t)
                         if (load(v) == kNoComponent)
-                            __atomic_store_n(&label[v], l, __ATOMIC_RELAXED), changed = true;
+                            __atomic_store_n(&label[v], l, __ATOMIC_RELAXED), p.changed = true;
                 }
-                return changed;
+                return p;
             },
-            [](bool a, bool b) { return a || b; });
-    const bool missing = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, nt), false,
-        [&](const tbb::blocked_range<size_t>& r, bool any) {
-            for (size_t i = r.begin(); i != r.end() && !any; ++i)
-                for (uint32_t v : mesh.triangles[i])
-                    any |= ofPoint[v] == kNoComponent;
-            return any;
-        },
-        [](bool a, bool b) { return a || b; });
-    if (missing) { // not from those components after all: leave it
-        computeAngleWeightedNormals(mesh);
-        return;
+            [](Pass a, const Pass& b) {
+                a.changed |= b.changed, a.missing |= b.missing;
+                return a;
+            });
+        if (!pass.missing) break;
+        if (!pass.changed) { // not from those components after all: leave it
+            computeAngleWeightedNormals(mesh);
+            return;
+        }
     }
     std::vector<double> volume, area;
     sums(mesh, ofPoint, count, volume, &area);
