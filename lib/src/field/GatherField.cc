@@ -72,6 +72,8 @@ wideSums(const float* X, const float* Y, const float* Z, const float* Rr, uint32
 }
 
 /// The box of a leaf's active voxels (at least one): from its mask's words (word x, bit y 8 + z).
+/// (OpenVDB's evalActiveBoundingBox visits the active voxels one by one: up to 512 a leaf, for
+/// every leaf of the band.)
 openvdb::CoordBBox activeBox(const LeafT& leaf)
 {
     const auto& mask = leaf.getValueMask();

@@ -82,9 +82,11 @@ double densitySpacing(const neighbors::CellIndex& index, double cell, double sta
         const double value = bulk[(density.end() - bulk) / 2];
         spacing = value > 0 ? std::pow(value, -1.0 / 3) : 0;
         if (!std::isfinite(spacing)) spacing = 0;
-        // (in the last round, whose support is the spacing's)
-        std::nth_element(count.begin(), count.begin() + ptrdiff_t(samples * 9 / 10), count.end());
-        if (round == 1 && count[samples * 9 / 10] < kMinBulkNeighbours) return 0; // no bulk
+        if (round == 1) { // (in the last round, whose support is the spacing's)
+            const auto tenth = count.begin() + ptrdiff_t(samples * 9 / 10);
+            std::nth_element(count.begin(), tenth, count.end());
+            if (*tenth < kMinBulkNeighbours) return 0; // no bulk
+        }
     }
     return spacing;
 }
