@@ -34,16 +34,11 @@ struct ParticleSums
     uint8_t cls = Interior;
 };
 
-/// From per-lane sums (count, V t^3, V t^2 d per axis; lane l = candidates k with
-/// k % kClassLanes == l, self included) to the particle's sums and class. L: anything indexable
-/// by 0 .. kClassLanes - 1.
-template <typename L>
-FLUIDSURF_HD inline ParticleSums classifyLanes(const L& count, const L& cf, const L& gx,
-                                               const L& gy, const L& gz, const ClassRule& rule)
+/// The class rule at one particle, from its lane sums added up in double (count, V t^3 and
+/// V t^2 d per axis, each the sum of its kClassLanes lanes in lane order, from +0).
+FLUIDSURF_HD inline ParticleSums classifyTotals(double cnt, double sum, const double (&g)[3],
+                                                const ClassRule& rule)
 {
-    double cnt = 0, sum = 0, g[3] = {0, 0, 0};
-    for (int l = 0; l < kClassLanes; ++l)
-        cnt += count[l], sum += cf[l], g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
     ParticleSums s;
     // |grad cf| * h: dimensionless, 0 inside, 0.62 on a flat lattice face.
     s.gradient = float(rule.gradientScale * sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]));
@@ -57,6 +52,20 @@ FLUIDSURF_HD inline ParticleSums classifyLanes(const L& count, const L& cf, cons
              s.colorField < rule.colorFieldThreshold || s.gradient > rule.colorGradientThreshold)
         s.cls = Surface;
     return s;
+}
+
+/// From per-lane sums (count, V t^3, V t^2 d per axis; lane l = candidates k with
+/// k % kClassLanes == l, self included) to the particle's sums and class. L: anything indexable
+/// by 0 .. kClassLanes - 1. (The CPU's AVX2 path adds the lanes up in registers, in the same
+/// order: classify/Classify.cc.)
+template <typename L>
+FLUIDSURF_HD inline ParticleSums classifyLanes(const L& count, const L& cf, const L& gx,
+                                               const L& gy, const L& gz, const ClassRule& rule)
+{
+    double cnt = 0, sum = 0, g[3] = {0, 0, 0};
+    for (int l = 0; l < kClassLanes; ++l)
+        cnt += count[l], sum += cf[l], g[0] += gx[l], g[1] += gy[l], g[2] += gz[l];
+    return classifyTotals(cnt, sum, g, rule);
 }
 
 } // namespace classify

@@ -55,10 +55,10 @@ struct Neighbourhood
     /// "When is double rounding innocuous?", 1995). In one pass with the copy, instead of a
     /// second pass in doubles. (The gather was half of classification's time on the 13.1M
     /// drop, a cell's 216 candidates serving its 8 particles.)
-    __attribute__((always_inline)) inline void gather(const neighbors::CellIndex& index,
-                                                      neighbors::NearbyCells& cells,
-                                                      const double lo[3], const double hi[3],
-                                                      const Vec3f& o, double uniformVolume)
+    template <bool kWide>
+    __attribute__((always_inline)) inline void
+    gather(const neighbors::CellIndex& index, neighbors::NearbyCells& cells, const double lo[3],
+           const double hi[3], const Vec3f& o, double uniformVolume)
     {
         constexpr float kFar = 3e38f; // (h^2 - d^2 < 0 for anything this far: an exact zero)
         mRanges.clear();
@@ -68,14 +68,22 @@ struct Neighbourhood
             m += e - b;
         });
         const size_t size = (m + kClassLanes - 1) / kClassLanes * kClassLanes;
-        for (std::vector<float>* c : {&x, &y, &z, &v})
-            c->resize(size);
+        // x, y, z: room for the 8 a wide copy may write past a cell's last particle (the next
+        // cell's copy or the padding below writes over them; no group reads beyond size)
+        for (std::vector<float>* c : {&x, &y, &z})
+            c->resize(size + kCopyLanes);
+        v.resize(size);
         float *xs = x.data(), *ys = y.data(), *zs = z.data(), *vs = v.data();
         size_t k = 0;
+        const size_t particles = index.positions.size();
         for (const uint64_t r : mRanges) {
             const uint32_t first = uint32_t(r), n = uint32_t(r >> 32) - first;
             const Vec3f* p = &index.positions[first];
-            for (size_t j = 0; j < n; ++j)
+            size_t j = 0;
+            if constexpr (kWide) // 8 at a time while 8 are there to read (past the cell's end too)
+                for (; j < n && first + j + kCopyLanes <= particles; j += kCopyLanes)
+                    copyRelative8(&p[j], o, &xs[k + j], &ys[k + j], &zs[k + j]);
+            for (; j < n; ++j)
                 xs[k + j] = p[j].x - o.x, ys[k + j] = p[j].y - o.y, zs[k + j] = p[j].z - o.z;
             if (!index.radii.empty()) {
                 const float* rs = &index.radii[first];
@@ -103,6 +111,33 @@ struct Neighbourhood
     }
 
 private:
+    static constexpr size_t kCopyLanes = 8;
+
+    /// p[0, 8)'s coordinates less o's, into x, y and z: the scalar loop's subtractions, in AVX
+    /// registers. The 24 floats of 8 points are 3 loads; each axis is picked from them by two
+    /// shuffles. (One point at a time, the copy was a fifth of classification's samples on the
+    /// 13.1M drop, a cell's 216 candidates for its 8 particles; a tenth now, mostly the loads.)
+    __attribute__((always_inline)) static void copyRelative8(const Vec3f* p, const Vec3f& o,
+                                                             float* x, float* y, float* z)
+    {
+        static_assert(sizeof(Vec3f) == 3 * sizeof(float));
+        typedef int32_t Ints __attribute__((vector_size(32)));
+        util::WideLanes a, b, c; // x0 y0 z0 x1 y1 z1 x2 y2 | z2 x3 y3 z3 x4 y4 z4 x5 | y5 ...
+        std::memcpy(&a, &p[0], sizeof a);
+        std::memcpy(&b, reinterpret_cast<const float*>(p) + 8, sizeof b);
+        std::memcpy(&c, reinterpret_cast<const float*>(p) + 16, sizeof c);
+        // each axis' first 6 from a and b (b's lane k as 8 + k), then its last 2 from c
+        const util::WideLanes xab = __builtin_shuffle(a, b, Ints{0, 3, 6, 9, 12, 15, 0, 0});
+        const util::WideLanes yab = __builtin_shuffle(a, b, Ints{1, 4, 7, 10, 13, 0, 0, 0});
+        const util::WideLanes zab = __builtin_shuffle(a, b, Ints{2, 5, 8, 11, 14, 0, 0, 0});
+        const util::WideLanes rx = __builtin_shuffle(xab, c, Ints{0, 1, 2, 3, 4, 5, 10, 13}) - o.x;
+        const util::WideLanes ry = __builtin_shuffle(yab, c, Ints{0, 1, 2, 3, 4, 8, 11, 14}) - o.y;
+        const util::WideLanes rz = __builtin_shuffle(zab, c, Ints{0, 1, 2, 3, 4, 9, 12, 15}) - o.z;
+        std::memcpy(x, &rx, sizeof rx);
+        std::memcpy(y, &ry, sizeof ry);
+        std::memcpy(z, &rz, sizeof rz);
+    }
+
     /// The least and largest of group g's coordinates c (two registers of util::kLanes)
     __attribute__((always_inline)) static void bound(const float* c, size_t g, float& lo, float& hi)
     {
@@ -233,6 +268,44 @@ __attribute__((always_inline)) inline void laneSums(const Neighbourhood& nb, con
     std::memcpy(out.gz, gz, sizeof gz);
 }
 
+/// classifyLanes(s...) with the lanes added up in AVX registers: (count, cf, gx, gy) of lane l
+/// as one vector of four doubles, the vectors added in lane order from +0, which is each
+/// scalar sum's order (gz alone, as classifyLanes adds it). One by one, the 40 conversions and
+/// additions and the moves between them were a tenth of classification's samples.
+__attribute__((always_inline)) inline ParticleSums classifyWide(const LaneSums& s,
+                                                                const ClassRule& rule)
+{
+    typedef double Doubles4 __attribute__((vector_size(32)));
+    typedef float Floats4 __attribute__((vector_size(16)));
+    typedef int32_t Ints __attribute__((vector_size(32)));
+    util::WideLanes c, f, x, y;
+    std::memcpy(&c, s.count, sizeof c), std::memcpy(&f, s.cf, sizeof f);
+    std::memcpy(&x, s.gx, sizeof x), std::memcpy(&y, s.gy, sizeof y);
+    // (lanes k of c and f, or of x and y, side by side in pairs, within each 128-bit half)
+    const util::WideLanes cf0 = __builtin_shuffle(c, f, Ints{0, 8, 1, 9, 4, 12, 5, 13}),
+                          cf1 = __builtin_shuffle(c, f, Ints{2, 10, 3, 11, 6, 14, 7, 15}),
+                          xy0 = __builtin_shuffle(x, y, Ints{0, 8, 1, 9, 4, 12, 5, 13}),
+                          xy1 = __builtin_shuffle(x, y, Ints{2, 10, 3, 11, 6, 14, 7, 15});
+    // t[k]: lane k's (count, cf, gx, gy) in its low half, lane k + 4's in its high half
+    const util::WideLanes t[4] = {__builtin_shuffle(cf0, xy0, Ints{0, 1, 8, 9, 4, 5, 12, 13}),
+                                  __builtin_shuffle(cf0, xy0, Ints{2, 3, 10, 11, 6, 7, 14, 15}),
+                                  __builtin_shuffle(cf1, xy1, Ints{0, 1, 8, 9, 4, 5, 12, 13}),
+                                  __builtin_shuffle(cf1, xy1, Ints{2, 3, 10, 11, 6, 7, 14, 15})};
+    static_assert(kClassLanes == 8);
+    Doubles4 sum{}; // +0, as classifyLanes starts
+    for (int half = 0; half < 2; ++half)
+        for (int k = 0; k < 4; ++k) {
+            Floats4 lane;
+            std::memcpy(&lane, reinterpret_cast<const float*>(&t[k]) + 4 * half, sizeof lane);
+            sum += __builtin_convertvector(lane, Doubles4);
+        }
+    double gz = 0;
+    for (int l = 0; l < kClassLanes; ++l)
+        gz += s.gz[l];
+    const double g[3] = {sum[2], sum[3], gz};
+    return classifyTotals(sum[0], sum[1], g, rule);
+}
+
 /// What classifyCells reads and writes.
 struct CellWork
 {
@@ -271,7 +344,8 @@ __attribute__((always_inline)) inline void classifyCells(const CellWork& w, size
             }
         for (int a = 0; a < 3; ++a)
             lo[a] -= h, hi[a] += h;
-        nb.gather(index, nearby, lo, hi, o, w.uniformVolume);
+        constexpr bool kWide = sizeof(V) == 8 * sizeof(float); // the AVX2 instance
+        nb.gather<kWide>(index, nearby, lo, hi, o, w.uniformVolume);
         live.resize(nb.x0.size());
         uint32_t computed = b;
         for (uint32_t i = b; i < e; ++i) {
@@ -296,8 +370,11 @@ __attribute__((always_inline)) inline void classifyCells(const CellWork& w, size
             const size_t nLive = liveGroups<V>(nb, px, py, pz, h2, live.data());
             LaneSums sums;
             laneSums<V, N>(nb, live.data(), nLive, px, py, pz, h2, sums);
-            const ParticleSums ps =
-                classifyLanes(sums.count, sums.cf, sums.gx, sums.gy, sums.gz, w.rule);
+            ParticleSums ps;
+            if constexpr (kWide)
+                ps = classifyWide(sums, w.rule);
+            else
+                ps = classifyLanes(sums.count, sums.cf, sums.gx, sums.gy, sums.gz, w.rule);
             if (w.withSums) {
                 out.neighbours[i] = ps.neighbours;
                 out.colorField[i] = ps.colorField;
