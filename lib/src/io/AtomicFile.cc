@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <mutex>
 #include <set>
+#include <utility>
 
 namespace fluidsurf {
 namespace io {
@@ -89,8 +90,13 @@ void AtomicFile::commit()
 {
     int fd = ::open(mTemp.c_str(), O_RDONLY);
     if (fd >= 0) {
-        ::fsync(fd);
+        // a failed fsync (EIO, ENOSPC, EDQUOT) means bytes may not have reached the disk: no
+        // rename over an older good file then (file systems that cannot sync say EINVAL)
+        const bool synced = ::fsync(fd) == 0 || errno == EINVAL || errno == EROFS;
+        const int err = errno;
         ::close(fd);
+        if (!synced)
+            throw OutputError(mTarget + ": write failed at the end: " + std::strerror(err));
     }
     if (::rename(mTemp.c_str(), mTarget.c_str()) != 0)
         throw OutputError(mTarget +
@@ -100,29 +106,39 @@ void AtomicFile::commit()
 
 StreamFile::StreamFile(const std::string& path) : mFile(path)
 {
-    mStream = std::fopen(mFile.tempPath().c_str(), "wb");
-    if (!mStream) throw OutputError(path + ": cannot create: " + std::strerror(errno));
+    mFd = ::open(mFile.tempPath().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (mFd < 0) throw OutputError(path + ": cannot create: " + std::strerror(errno));
 }
 
 StreamFile::~StreamFile()
 {
-    if (mStream) std::fclose(mStream); // an error on the way: AtomicFile removes the temporary
+    if (mFd >= 0) ::close(mFd); // an error on the way: AtomicFile removes the temporary
 }
 
 void StreamFile::write(const void* data, size_t size)
 {
-    if (size && std::fwrite(data, 1, size, mStream) != size)
-        throw OutputError(mFile.target() + ": write failed: " + std::strerror(errno));
+    const char* p = static_cast<const char*>(data);
+    while (size > 0) {
+        const ssize_t n = ::write(mFd, p, size);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0)
+            throw OutputError(mFile.target() +
+                              ": write failed: " + std::strerror(n < 0 ? errno : ENOSPC));
+        p += n, size -= size_t(n), mWritten += uint64_t(n);
+    }
+    if (mWritten - mWrittenBack >= kWriteBack) {
+        // advice only: a file system that cannot do it just writes at fsync
+        ::sync_file_range(mFd, off64_t(mWrittenBack), off64_t(mWritten - mWrittenBack),
+                          SYNC_FILE_RANGE_WRITE);
+        mWrittenBack = mWritten;
+    }
 }
 
 void StreamFile::commit()
 {
-    const bool ok = std::fflush(mStream) == 0;
-    const int err = errno;
-    const bool closed = std::fclose(mStream) == 0;
-    mStream = nullptr;
-    if (!ok || !closed)
-        throw OutputError(mFile.target() + ": write failed: " + std::strerror(ok ? errno : err));
+    const int fd = std::exchange(mFd, -1);
+    if (::close(fd) != 0)
+        throw OutputError(mFile.target() + ": write failed: " + std::strerror(errno));
     mFile.commit();
 }
 

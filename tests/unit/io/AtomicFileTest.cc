@@ -2,9 +2,13 @@
 // a killed run left behind are removed by the next run in the folder.
 #include "TestData.h"
 
+#include <fluidsurf/Error.h>
 #include <fluidsurf/io/AtomicFile.h>
 
+#include "io/StreamFile.h"
+
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <dirent.h>
 #include <signal.h>
@@ -55,6 +59,57 @@ TEST(OutputGroup, AllOrNothing)
     EXPECT_EQ(test::readFileBytes(dir.path("a.obj")), "new a");
     EXPECT_EQ(test::readFileBytes(dir.path("b.vdb")), "new b");
     EXPECT_EQ(listFolder(dir.path()).size(), 2u);
+}
+
+/// Item i's text: its number and a run of letters whose length varies, so that chunks and blocks
+/// end in the middle of nothing in particular.
+void itemText(std::string& out, size_t i)
+{
+    out += std::to_string(i);
+    out.append(i % 23, char('a' + i % 26));
+    out += '\n';
+}
+
+// writeItems encodes a block on the other threads while it writes the one before: the file must
+// hold every item once, in order, whatever the thread count, across several blocks (262,144 items
+// each) and past the size at which the disk is asked to start writing (StreamFile::kWriteBack).
+TEST(StreamFile, ItemsOfManyBlocksComeOutInOrderForAnyThreadCount)
+{
+    const test::TempDir dir;
+    const size_t count = 3 * 262144 + 12345;
+    std::string expected = "header\n";
+    for (size_t i = 0; i < count; ++i)
+        itemText(expected, i);
+    ASSERT_GT(expected.size(), io::StreamFile::kWriteBack); // the write-back is reached
+    for (int threads : {1, 2, 5}) {
+        const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        const std::string path = dir.path("items.txt");
+        io::StreamFile out(path);
+        out.write("header\n");
+        io::writeItems(out, count, 16, itemText);
+        out.commit();
+        EXPECT_TRUE(test::readFileBytes(path) == expected) << threads << " threads";
+    }
+    EXPECT_EQ(listFolder(dir.path()).size(), 1u) << "temporaries left behind";
+}
+
+// An item that throws in the middle (a block being encoded while another is written): the error
+// comes out, and neither the target nor a temporary is left.
+TEST(StreamFile, AnErrorWhileEncodingLeavesNoFile)
+{
+    const test::TempDir dir;
+    const size_t count = 2 * 262144 + 10;
+    EXPECT_THROW(
+        {
+            io::StreamFile out(dir.path("items.txt"));
+            io::writeItems(out, count, 16, [](std::string& s, size_t i) {
+                if (i == 262144 + 5) throw ValueError("item 262149");
+                itemText(s, i);
+            });
+            out.commit();
+        },
+        ValueError);
+    EXPECT_TRUE(listFolder(dir.path()).empty());
 }
 
 TEST(AtomicFile, RemovesTemporariesOfKilledRuns)
