@@ -116,7 +116,8 @@ struct FrontierFinder
                 }
         }
     }
-    void join(FrontierFinder& other) { front->topologyUnion(*other.front); }
+    /// (the other's nodes moved in where this has none: see narrowband/NarrowBand.cc's join)
+    void join(FrontierFinder& other) { front->merge(*other.front, openvdb::MERGE_ACTIVE_STATES); }
 };
 
 /// grown's active voxels, with their values, into tree (where they are inactive). The leaves
