@@ -39,6 +39,8 @@
 #include "post/ShapeGuard.h"
 #include "post/StepGuard.h"
 
+#include "util/Memory.h"
+
 #include <fluidsurf/Mesh.h>
 #include <fluidsurf/MeshCheck.h>
 
@@ -66,7 +68,7 @@ constexpr uint32_t kNone = UINT32_MAX;
 struct State
 {
     Vec3d middle{0.0}; ///< of the input's bounds
-    std::vector<Vec3d> points;
+    util::NoInitVector<Vec3d> points;
     /// One a point, relative to it (see makeState): the planes of the input triangles it
     /// stands for. Packed in floats: the largest array here (a double one was 169 MB on the
     /// 1.7M-particle frame).
@@ -75,11 +77,11 @@ struct State
     /// a collapse adds its point's largest distance to the planes of the triangles it replaces
     /// to the larger drift of its two ends (an upper bound along the normals, where the
     /// quadric's mean can hide a tip pulled in by a few voxels).
-    std::vector<float> drift;
+    util::NoInitVector<float> drift;
     std::vector<Tri> triangles;
     /// Per triangle, bit k: its edge (t[k], t[k + 1]) was refused, and no collapse has touched
     /// either end since (see the top of the file).
-    std::vector<uint8_t> refused;
+    util::NoInitVector<uint8_t> refused;
 };
 
 /// The planes of two vertices (their quadrics qa and qb, each about its own point), their
@@ -234,7 +236,7 @@ class Block
 {
 public:
     /// `local`: one per thread.
-    Block(State& s, const uint32_t* tris, size_t n, const std::vector<uint32_t>& valence,
+    Block(State& s, const uint32_t* tris, size_t n, const util::NoInitVector<uint32_t>& valence,
           LocalNumbers& local)
         : mS(s), mSlots(tris)
     {
