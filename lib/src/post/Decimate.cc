@@ -46,6 +46,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <utility>
@@ -328,6 +329,33 @@ Shares shareOut(const State& s, const Blocks& blocks, double maxError, size_t ne
     return sh;
 }
 
+/// The triangles not marked kGone (with their State::refused), moved down in place in order;
+/// returns how many. Each fixed piece moves its own down to its start on all threads, then the
+/// pieces move down one after the other, whole (one thread's pass over every triangle was 0.017 s
+/// of the 13.1M drop's decimation on 16 threads).
+size_t dropGone(State& s)
+{
+    constexpr size_t kPiece = size_t(1) << 16;
+    const size_t n = s.triangles.size(), pieces = (n + kPiece - 1) / kPiece;
+    std::vector<size_t> kept(pieces);
+    tbb::parallel_for(size_t(0), pieces, [&](size_t p) {
+        size_t to = p * kPiece;
+        for (size_t t = p * kPiece; t < std::min(n, (p + 1) * kPiece); ++t)
+            if (s.refused[t] != kGone)
+                s.triangles[to] = s.triangles[t], s.refused[to++] = s.refused[t];
+        kept[p] = to - p * kPiece;
+    });
+    size_t left = 0;
+    for (size_t p = 0; p < pieces; ++p) { // (each lands at or below where it lies)
+        if (left != p * kPiece) {
+            std::memmove(&s.triangles[left], &s.triangles[p * kPiece], kept[p] * sizeof(Tri));
+            std::memmove(&s.refused[left], &s.refused[p * kPiece], kept[p]);
+        }
+        left += kept[p];
+    }
+    return left;
+}
+
 /// Forgets the refusals (State::refused) of the edges with a touched end, and clears `touched`.
 void forgetTouched(State& s, std::vector<uint8_t>& touched)
 {
@@ -468,10 +496,7 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
             for (size_t i = blockStart[b] + results[b].alive; i < blockStart[b + 1]; ++i)
                 s.refused[tris[i]] = kGone;
         });
-        size_t left = 0;
-        for (size_t t = 0; t < n; ++t)
-            if (s.refused[t] != kGone)
-                s.triangles[left] = s.triangles[t], s.refused[left++] = s.refused[t];
+        const size_t left = dropGone(s);
         s.triangles.resize(left);
         s.refused.resize(left);
         forgetTouched(s, touched);
