@@ -97,9 +97,8 @@ State makeState(TriangleMesh& mesh)
     });
     std::vector<Vec3f>().swap(mesh.points); // s.points has them
     s.triangles = std::move(mesh.triangles);
-    // (not zeroed by one thread and then again: the state's arrays are NoInitVectors, their
-    // pages first touched here on all threads; one thread's fills were 0.024 s of the state's
-    // set-up on any thread count, a third of it on 16)
+    // (the state's arrays are NoInitVectors, filled here on all threads: zeroed by one thread,
+    // they took 0.024 s of the state's set-up at any thread count, a third of it on 16)
     s.refused.resize(s.triangles.size());
     util::fillInParallel(s.refused, uint8_t(0));
     s.drift.resize(nv);

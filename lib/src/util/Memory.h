@@ -83,8 +83,8 @@ void populateInParallel(uintptr_t begin, size_t bytes);
 /// new elements on one thread, and the page faults of that first touch, not the zeros, are its
 /// cost (157 MB of positions: 70 ms on one thread here, 34 ms with the faults on two; more so
 /// on sixteen). For the vectors with the standard allocator: the public types' (ParticleSet,
-/// TriangleMesh) and the few of the library's own that are handed to code taking those
-/// (decimation's points); its other large arrays are NoInitVectors, first touched on all threads.
+/// TriangleMesh) and the few of the library's own that are handed to code taking those; its
+/// other large arrays are NoInitVectors, first touched on all threads.
 template <typename Vector> void resizeInParallel(Vector& v, size_t n)
 {
     using T = typename Vector::value_type;
