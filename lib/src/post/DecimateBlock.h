@@ -63,6 +63,12 @@ using Tri = std::array<uint32_t, 3>;
 
 constexpr size_t kMaxFan = 64; ///< vertices with more triangles are left alone
 constexpr uint32_t kNone = UINT32_MAX;
+/// Block::run rids its heap of the stale entries when about this share of it is: they were
+/// four in five of the pops, each a sift from the top to a leaf, where a pass over the heap
+/// drops them and makes the rest a heap again in linear time. The live entries pop in the same
+/// order, and so does what Block::touch compares with (the last entry popped: a stale entry
+/// only pops before a live one that ranks after it, with no push between).
+constexpr size_t kPurgeShare = 1;
 
 /// The whole mesh between passes, points relative to the middle of its bounds.
 struct State
@@ -174,10 +180,17 @@ public:
     void assign(std::vector<T>&& items)
     {
         mItems = std::move(items);
-        for (size_t i = mItems.size() / kArity + 1; i-- > 0;)
-            if (kArity * i + 1 < mItems.size()) siftDown(i, mItems[i]);
+        heapify();
+    }
+    /// Drops the entries `gone` says are gone, and makes a heap of the rest, in O(n): the rest
+    /// pop in the same order as they would have.
+    template <typename Gone> void removeIf(Gone gone)
+    {
+        mItems.erase(std::remove_if(mItems.begin(), mItems.end(), gone), mItems.end());
+        heapify();
     }
     bool empty() const { return mItems.empty(); }
+    size_t size() const { return mItems.size(); }
     const T& top() const { return mItems.front(); }
     void push(const T& x)
     {
@@ -194,6 +207,12 @@ public:
 
 private:
     static constexpr size_t kArity = 4;
+
+    void heapify()
+    {
+        for (size_t i = mItems.size() / kArity + 1; i-- > 0;)
+            if (kArity * i + 1 < mItems.size()) siftDown(i, mItems[i]);
+    }
 
     /// x into the hole at i, which moves to a leaf along the smallest children and then up.
     void siftDown(size_t i, const T x)
@@ -305,12 +324,21 @@ public:
         pushEdges(&entries);
         mHeap.assign(std::move(entries));
         mPopped = false;
+        auto stale = [&](const Entry& e) {
+            return e.found < mChangedAt[uint32_t(e.key)] || e.found < mChangedAt[e.b];
+        };
+        mStale = 0;
         while (!mHeap.empty() && out.collapses < budget) {
+            if (mStale > kPurgeShare * mHeap.size()) {
+                mHeap.removeIf(stale); // (see kPurgeShare)
+                mStale = 0;
+                if (mHeap.empty()) break;
+            }
             const Entry e = mHeap.top();
             mHeap.pop();
             if (popsAfterLast(e)) mLast = e, mPopped = true;
             const uint32_t a = uint32_t(e.key);
-            if (e.found < mChangedAt[a] || e.found < mChangedAt[e.b]) continue; // an end changed
+            if (stale(e)) continue; // an end changed
             double error = 0;
             const Outcome o = collapse(a, e.b, mFound[e.found], error);
             if (o == Outcome::Collapsed) {
@@ -637,6 +665,7 @@ private:
         }
         mStart[a] = start, mCount[a] = uint32_t(mRefs.size()) - start;
         mCount[b] = 0;
+        mStale += mTa.size() + mTb.size(); // about the entries of a's and b's edges
         mChangedAt[a] = mChangedAt[b] = uint32_t(mFound.size()), mOwn[b] = 0;
         const uint32_t mark = ++mStamp;
         mRing.clear();
@@ -677,6 +706,9 @@ private:
     /// were an extra load and a cache miss at every corner the guards look at).
     std::vector<Vec3d> mPoint;
     RankHeap<Entry> mHeap;
+    /// About how many of the heap's entries are stale: the edges of the ends of the collapses
+    /// since the heap was last rid of them (run).
+    size_t mStale = 0;
     double mThreshold = 0, mMaxDrift = 0, mMaxStep = 0;
     StepGuard mStep{0};          ///< the fans of the collapse being tried (DecimateTarget::maxStep)
     std::vector<uint32_t> mMark; ///< per vertex: the stamp of the last neighbour walk it was in
