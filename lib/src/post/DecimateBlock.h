@@ -170,9 +170,9 @@ private:
 /// in one order whatever the heap's layout). Why not std::priority_queue: its sift-down chooses
 /// each level's child with a branch that goes either way at random; here the choice is a select
 /// and the pop sifts its hole to a leaf first (Floyd), a third fewer compares. Four children a
-/// node: half the levels of a binary heap, for three compares a level; two thirds of the pops
-/// are of stale entries, where the pop is all the work. Block's heap was an eighth of the
-/// decimation's time.
+/// node: half the levels of a binary heap, for three compares a level. Block's heap was an
+/// eighth of the decimation's time; most entries go stale before they pop, and removeIf drops
+/// them in bulk (see kPurgeShare).
 template <typename T> class RankHeap
 {
 public:

@@ -38,7 +38,7 @@ void buildIncidence(size_t items, uint32_t keys, KeysOf keysOf, Vector& start, V
     size_t runs = std::clamp<size_t>(size_t(tbb::this_task_arena::max_concurrency()), 1, kMaxRuns);
     while (runs > 1 && runs * size_t(keys) > kRowsPerItem * items)
         --runs;
-    const size_t per = (items + runs - 1) / std::max<size_t>(runs, 1);
+    const size_t per = (items + runs - 1) / runs;
     // at[r * keys + k]: run r's count of key k, then where its next item of key k goes in list
     NoInitVector<uint32_t> at(runs * size_t(keys));
     auto forRun = [&](size_t r, auto&& f) {
