@@ -27,11 +27,16 @@ namespace cli {
 void setUpProcessMemory()
 {
 #ifdef __GLIBC__
-    // Arrays of a MiB and more are mapped and unmapped whole. glibc's default raises that
-    // threshold to the largest block freed so far (up to 32 MiB), after which the stages'
-    // large arrays come from the heap and their holes stay resident: 40 MB more peak on the
-    // 1.7M-particle frame, for ~1% more time (fresh pages).
-    mallopt(M_MMAP_THRESHOLD, 1 << 20);
+    // Memory a stage frees is kept for the next one: arrays come from the heap, never from a
+    // mapping of their own (unmapped when freed), and the heap is not trimmed. A fresh page
+    // costs a fault and a zeroed page (1.6 us each on the 2-core VM), and 16 threads faulting
+    // at once contend in the kernel: with arrays of a MiB and more mapped whole (this was
+    // 1 MiB), the 13.1M-particle drop took 486k faults on the GPU host's 16 threads, 304k
+    // now, and 1.63 -> 1.48 s. The cost, the heap's holes staying resident: peak 604 -> 623 MB
+    // there, 194 -> 202 MB on the 1.7M-particle frame (153 -> 154 MB on 2 cores). In a
+    // sequence, each frame reuses the last one's memory. (BENCHMARKS.md, issue 16.)
+    mallopt(M_MMAP_THRESHOLD, 1 << 30);
+    mallopt(M_TRIM_THRESHOLD, 1 << 30);
 #endif
     releaseLoaderTables();
 }

@@ -7,7 +7,8 @@
 namespace fluidsurf {
 namespace cli {
 
-/// glibc's mmap threshold fixed at 1 MiB, and releaseLoaderTables() (see ProcessMemory.cc).
+/// glibc's heap kept for reuse (no mapping a large array, no trimming), and
+/// releaseLoaderTables() (see ProcessMemory.cc).
 void setUpProcessMemory();
 
 /// Drops from the process the resident pages of each loaded object's symbol tables (the
