@@ -27,18 +27,16 @@ namespace cli {
 void setUpProcessMemory()
 {
 #ifdef __GLIBC__
-    // Memory a stage frees is kept for the next one: arrays come from the heap, never from a
-    // mapping of their own (unmapped when freed), and free() does not trim the heap (the
-    // stages' own malloc_trim calls, util::returnFreedMemory, still do). A fresh page
-    // costs a fault and a zeroed page (1.6 us each on the 2-core VM), and 16 threads faulting
-    // at once contend in the kernel: with arrays of a MiB and more mapped whole (this was
-    // 1 MiB), the 13.1M-particle drop took 486k faults on the GPU host's 16 threads, 304k
-    // now, and 1.63 -> 1.48 s. The cost, the heap's holes staying resident: peak 604 -> 623 MB
-    // there, 194 -> 202 MB on the 1.7M-particle frame (153 -> 154 MB on 2 cores), and more in
-    // a sequence with frames in flight, whose threads' arenas keep their holes (587 -> 698-781
-    // MB for that frame x 12 on 16 threads; --in-flight 1 is the low-memory way). The
-    // malloc_trim calls stay: without them the peaks grew by a third for a few percent.
-    // (BENCHMARKS.md, issue 16.)
+    // Memory a stage frees is kept for the next one: no array gets a mapping of its own
+    // (unmapped when freed), and free() does not trim the heap (the stages' malloc_trim calls,
+    // util::returnFreedMemory, still do). Each fresh page costs a fault and a zeroed page, and
+    // 16 threads faulting at once contend in the kernel: with arrays of 1 MiB and more mapped
+    // whole, as this was, the 13.1M-particle drop took 1.63 s and 486k faults on an H200
+    // host's 16 threads, 1.48 s and 304k now. The cost is the heap's holes staying resident:
+    // peak 604 -> 627 MB there and 196 -> 206 MB on the 1.7M-particle frame (about the same
+    // on 2 cores), more in a sequence with frames in flight (587 -> 698-781 MB for that frame
+    // x 12; --in-flight 1 is the low-memory way). Without the malloc_trim calls too, peaks
+    // grew by a third for a few percent. (BENCHMARKS.md, issue 16.)
     mallopt(M_MMAP_THRESHOLD, 1 << 30);
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
 #endif

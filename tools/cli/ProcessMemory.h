@@ -7,7 +7,7 @@
 namespace fluidsurf {
 namespace cli {
 
-/// glibc's heap kept for reuse (no mapping a large array, no trimming), and
+/// glibc's heap kept for reuse (no large array mapped on its own, no trimming on free), and
 /// releaseLoaderTables() (see ProcessMemory.cc).
 void setUpProcessMemory();
 
