@@ -13,9 +13,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include <algorithm>
-#include <cmath>
-
 namespace fluidsurf {
 namespace post {
 

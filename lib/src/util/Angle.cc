@@ -9,8 +9,7 @@
 
 #include <fluidsurf/Error.h>
 
-#include <algorithm>
-#include <cmath>
+#include <cmath> // (M_PI and its kin)
 #include <cstring>
 
 namespace fluidsurf {
@@ -92,8 +91,7 @@ void angles(const double* y, const double* x, double* angle, size_t n, int lanes
 
 void angles(const double* y, const double* x, double* angle, size_t n)
 {
-    static const int lanes = doubleRegisterLanes();
-    lanes == 4 ? wideAngles(y, x, angle, n) : narrowAngles(y, x, angle, n);
+    angles(y, x, angle, n, doubleRegisterLanes());
 }
 
 } // namespace util
