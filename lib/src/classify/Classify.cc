@@ -7,6 +7,7 @@
 #include "classify/Classify.h"
 
 #include "util/Lanes.h"
+#include "util/SetBits.h"
 
 #include <fluidsurf/Error.h>
 
@@ -167,24 +168,6 @@ __attribute__((always_inline)) inline V reachOf(const float* lo, const float* hi
     return e > 0.f ? e : V{};
 }
 
-/// For each 8-bit mask, the positions of its set bits in order, and how many.
-struct SetBits
-{
-    int32_t positions[256][8];
-    uint8_t count[256];
-};
-
-constexpr SetBits setBits()
-{
-    SetBits t{};
-    for (unsigned m = 0; m < 256; ++m)
-        for (int l = 0; l < 8; ++l)
-            if (m >> l & 1) t.positions[m][t.count[m]++] = l;
-    return t;
-}
-
-constexpr SetBits kSetBits = setBits();
-
 /// The groups of nb that may hold a candidate closer than h to (px, py, pz), into `live`, in
 /// order; returns how many. A group left out adds nothing to the sums: each lane's d^2 =
 /// dx dx + dy dy + dz dz is at least the group's (ex ex + ey ey) + ez ez below, e the float
@@ -217,10 +200,10 @@ __attribute__((always_inline)) inline size_t liveGroups(const Neighbourhood& nb,
             flags |= __builtin_shuffle(flags, Ints{1, 0, 1, 0, 1, 0, 1, 0});
             const unsigned mask = unsigned(flags[0]);
             Ints numbers;
-            std::memcpy(&numbers, kSetBits.positions[mask], sizeof numbers);
+            std::memcpy(&numbers, util::kSetBits.positions[mask], sizeof numbers);
             numbers += int32_t(g);
             std::memcpy(&live[n], &numbers, sizeof numbers);
-            n += kSetBits.count[mask];
+            n += util::kSetBits.count[mask];
         } else {
             for (int l = 0; l < kWidth; ++l)
                 live[n] = uint32_t(g + l), n += near[l] != 0; // no branch: half are live
