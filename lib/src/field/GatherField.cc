@@ -53,48 +53,68 @@ struct Scratch
     std::vector<uint32_t> rowSlabStart; //   where each z-slab starts
 };
 
-/// The particles [b, e) of a leaf's sorted ones (sx, ...) within R of a row's line (fx, fy),
-/// appended in order to the row's (rx, ...) from rx[n] on; returns the new n. Written kPad - 1
-/// past the end (room for it: see gather). Eight at a time with AVX2: the chosen lanes packed to
-/// the front of each register by one permute (util::kSetBits), stored whole, and n moved on by
-/// their count. The test is the scalar one, float for float (no FMA: the same choices).
+/// What a row picks from a leaf's sorted particles (sx, ...): in each slab z of [zlo, zhi), the
+/// x-columns [xlo, xhi] (sections z B + xlo to z B + xhi, one run), those within R of the row's
+/// line (fx, fy) (ex^2 + ey^2 < R2 in float).
+struct RowPick
+{
+    const uint32_t* sectionStart;
+    size_t B;
+    int xlo, xhi, zlo, zhi;
+    float fx, fy, R2;
+};
+
+/// The row's picks, appended in order to (rx, ...); slabStart[z] set for z in [zlo, zhi]; returns
+/// how many. Written kPad - 1 past the end (room for it: see gather). Eight at a time with AVX2:
+/// the chosen lanes packed to the front of each register by one permute (util::kSetBits), stored
+/// whole, and the count moved on by their number. The test is the scalar one, float for float
+/// (no FMA: the same choices).
 template <bool Radii>
-__attribute__((target("avx2"))) uint32_t pickWide(const Scratch& s, Scratch& out, uint32_t b,
-                                                  uint32_t e, uint32_t n, float fx, float fy,
-                                                  float R2)
+__attribute__((target("avx2"))) uint32_t pickWide(const RowPick& row, Scratch& s)
 {
     using util::WideLanes;
-    for (uint32_t p = b; p < e; p += util::kWideLanes) {
-        WideLanes x, y, z, r{};
-        std::memcpy(&x, &s.sx[p], sizeof x), std::memcpy(&y, &s.sy[p], sizeof y);
-        std::memcpy(&z, &s.sz[p], sizeof z);
-        if (Radii) std::memcpy(&r, &s.sr[p], sizeof r);
-        const WideLanes ex = x - fx, ey = y - fy;
-        const __m256 in = __m256(ex * ex + ey * ey < R2);
-        const unsigned left = std::min<uint32_t>(e - p, util::kWideLanes);
-        const unsigned mask = unsigned(_mm256_movemask_ps(in)) & ((1u << left) - 1);
-        __m256i order;
-        std::memcpy(&order, util::kSetBits.positions[mask], sizeof order);
-        _mm256_storeu_ps(&out.rx[n], _mm256_permutevar8x32_ps(__m256(x), order));
-        _mm256_storeu_ps(&out.ry[n], _mm256_permutevar8x32_ps(__m256(y), order));
-        _mm256_storeu_ps(&out.rz[n], _mm256_permutevar8x32_ps(__m256(z), order));
-        if (Radii) _mm256_storeu_ps(&out.rr[n], _mm256_permutevar8x32_ps(__m256(r), order));
-        n += util::kSetBits.count[mask];
+    uint32_t n = 0;
+    for (int z = row.zlo; z < row.zhi; ++z) {
+        s.rowSlabStart[z] = n;
+        const uint32_t e = row.sectionStart[size_t(z) * row.B + row.xhi + 1];
+        for (uint32_t p = row.sectionStart[size_t(z) * row.B + row.xlo]; p < e;
+             p += util::kWideLanes) {
+            WideLanes x, y, z8, r{};
+            std::memcpy(&x, &s.sx[p], sizeof x), std::memcpy(&y, &s.sy[p], sizeof y);
+            std::memcpy(&z8, &s.sz[p], sizeof z8);
+            if (Radii) std::memcpy(&r, &s.sr[p], sizeof r);
+            const WideLanes ex = x - row.fx, ey = y - row.fy;
+            const __m256 in = __m256(ex * ex + ey * ey < row.R2);
+            const unsigned left = std::min<uint32_t>(e - p, util::kWideLanes);
+            const unsigned mask = unsigned(_mm256_movemask_ps(in)) & ((1u << left) - 1);
+            __m256i order;
+            std::memcpy(&order, util::kSetBits.positions[mask], sizeof order);
+            _mm256_storeu_ps(&s.rx[n], _mm256_permutevar8x32_ps(__m256(x), order));
+            _mm256_storeu_ps(&s.ry[n], _mm256_permutevar8x32_ps(__m256(y), order));
+            _mm256_storeu_ps(&s.rz[n], _mm256_permutevar8x32_ps(__m256(z8), order));
+            if (Radii) _mm256_storeu_ps(&s.rr[n], _mm256_permutevar8x32_ps(__m256(r), order));
+            n += util::kSetBits.count[mask];
+        }
     }
+    s.rowSlabStart[row.zhi] = n;
     return n;
 }
 
 /// pickWide one at a time, without branches (which particles are left out is unpredictable).
-template <bool Radii>
-uint32_t pickNarrow(const Scratch& s, Scratch& out, uint32_t b, uint32_t e, uint32_t n, float fx,
-                    float fy, float R2)
+template <bool Radii> uint32_t pickNarrow(const RowPick& row, Scratch& s)
 {
-    for (uint32_t p = b; p < e; ++p) {
-        const float ex = s.sx[p] - fx, ey = s.sy[p] - fy;
-        out.rx[n] = s.sx[p], out.ry[n] = s.sy[p], out.rz[n] = s.sz[p];
-        if (Radii) out.rr[n] = s.sr[p];
-        n += ex * ex + ey * ey < R2;
+    uint32_t n = 0;
+    for (int z = row.zlo; z < row.zhi; ++z) {
+        s.rowSlabStart[z] = n;
+        const uint32_t e = row.sectionStart[size_t(z) * row.B + row.xhi + 1];
+        for (uint32_t p = row.sectionStart[size_t(z) * row.B + row.xlo]; p < e; ++p) {
+            const float ex = s.sx[p] - row.fx, ey = s.sy[p] - row.fy;
+            s.rx[n] = s.sx[p], s.ry[n] = s.sy[p], s.rz[n] = s.sz[p];
+            if (Radii) s.rr[n] = s.sr[p];
+            n += ex * ex + ey * ey < row.R2;
+        }
     }
+    s.rowSlabStart[row.zhi] = n;
     return n;
 }
 
@@ -263,21 +283,18 @@ struct Kernel
     void selectRow(int i, int j, int zlo, int zhi, Scratch& s) const
     {
         const double vx = i * dx;
-        const float fx = float(vx), fy = float(j * dx), R2 = float(R * R);
-        const int B = binCount(), xlo = binOf(vx - R), xhi = binOf(vx + R);
-        uint32_t n = 0;
-        for (int z = zlo; z < zhi; ++z) {
-            s.rowSlabStart[z] = n;
-            const uint32_t b = s.sectionStart[size_t(z) * B + xlo],
-                           e = s.sectionStart[size_t(z) * B + xhi + 1];
-            if (lanes == util::kWideLanes) // (fieldLanes(): the CPU has AVX2)
-                n = radii ? pickWide<true>(s, s, b, e, n, fx, fy, R2)
-                          : pickWide<false>(s, s, b, e, n, fx, fy, R2);
-            else
-                n = radii ? pickNarrow<true>(s, s, b, e, n, fx, fy, R2)
-                          : pickNarrow<false>(s, s, b, e, n, fx, fy, R2);
-        }
-        s.rowSlabStart[zhi] = n;
+        const RowPick row{s.sectionStart.data(),
+                          size_t(binCount()),
+                          binOf(vx - R),
+                          binOf(vx + R),
+                          zlo,
+                          zhi,
+                          float(vx),
+                          float(j * dx),
+                          float(R * R)};
+        const uint32_t n = lanes == util::kWideLanes // (fieldLanes(): the CPU has AVX2)
+                               ? (radii ? pickWide<true>(row, s) : pickWide<false>(row, s))
+                               : (radii ? pickNarrow<true>(row, s) : pickNarrow<false>(row, s));
         for (int l = 0; l < kPad; ++l) {
             s.rx[n + l] = s.ry[n + l] = s.rz[n + l] = kFar;
             if (radii) s.rr[n + l] = 0;
