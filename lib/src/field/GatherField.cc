@@ -184,7 +184,7 @@ struct Kernel
     // reach 1 (voxels of R or more) that bound does not hold, and the slab stays.
     int window = reach >= 2 ? 2 * reach : 2 * reach + 1;
 
-    // Slabs per axis: the leaf's voxels and reach more on either side (at most 65535: uint16_t).
+    // Slabs per axis: the leaf's voxels and reach more on either side.
     int slabCount() const { return LeafT::DIM + 2 * reach; }
     int slabOf(double local) const
     {
