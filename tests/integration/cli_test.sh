@@ -237,10 +237,15 @@ if "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/gpu.vdb" --device cuda -q 2>/
     summary() { "$BIN" rasterize "$T/drop.bgeo" -r 0.01 -o "$T/$1.vdb" --device "$1" | grep -o '([0-9].*active voxels'; }
     check "rasterize --device cuda: same classes and active voxels as cpu" bash -c "[ \"$(summary cuda)\" = \"$(summary cpu)\" ] && [ -n \"$(summary cpu)\" ]"
     check "reconstruct --device cuda --check: watertight" bash -c "'$BIN' reconstruct '$T/drop.bgeo' -r 0.01 -o '$T/gpu.obj' --device cuda --check | grep -q watertight"
+    "$BIN" mesh "$T/drop_ls.vdb" -o "$T/mesh_cpu.ply" -q
+    check "mesh --device cuda: the CPU's mesh, byte for byte" bash -c "'$BIN' mesh '$T/drop_ls.vdb' -o '$T/mesh_gpu.ply' --device cuda -q && cmp '$T/mesh_cpu.ply' '$T/mesh_gpu.ply'"
 else
     expect_error "rasterize --device cuda without a GPU" "CUDA" "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/gpu.vdb" --device cuda
     check "no output after the CUDA error" test ! -e "$T/gpu.vdb"
+    expect_error "mesh --device cuda without a GPU" "CUDA" "$BIN" mesh "$T/drop_ls.vdb" -o "$T/gpu.obj" --device cuda
+    check "no mesh after the CUDA error" test ! -e "$T/gpu.obj"
 fi
+check "mesh --device auto" "$BIN" mesh "$T/drop_ls.vdb" -o "$T/auto.obj" --device auto -q
 # A bad input fails in milliseconds, while the GPU's context may still be being made on a thread
 # of its own (prepareDevice): the process must end all the same, with its one error line. (An
 # exit that began during that hung for good on the H100 machine, SIGTERM notwithstanding.)

@@ -227,9 +227,16 @@ Runner addMeshCommand(CLI::App& app)
     cmd->add_option("--grid", o->grid,
                     "name of the float grid to mesh (default: the first level set)");
     addMeshOutputOptions(cmd, *o);
+    cmd->add_option("--device", o->pipeline.device,
+                    "cpu, cuda (marching cubes on the GPU, the same mesh byte for byte; the "
+                    "openvdb mesher and adaptive files run on the CPU) or auto (cuda when a "
+                    "usable GPU is present)")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
     cmd->footer(
         "Examples:\n"
         "  fluidsurf mesh frame.vdb -o frame.obj\n"
+        "  fluidsurf mesh frame.vdb -o frame.ply --device cuda\n"
         "  fluidsurf mesh smoke.vdb --grid surface --mesher openvdb -o surface.ply\n"
         "  fluidsurf mesh 'vdb/f_{:04}.vdb' -o 'obj/f_{:04}.obj' --frames 1-100\n"
         "Reads any VDB level set (ours or another tool's); meshes its zero crossing with\n"

@@ -105,8 +105,9 @@ void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
         ->capture_default_str()
         ->check(CLI::IsMember({"narrow-band", "gather-full", "scatter"}));
     cmd->add_option("--device", o.device,
-                    "cpu, cuda (the narrow band on the GPU: sort, classify, band and gather; "
-                    "gather-full gathers there) or auto (cuda when a usable GPU is present)")
+                    "cpu, cuda (the narrow band on the GPU: sort, classify, band and gather, "
+                    "then marching cubes; gather-full gathers there) or auto (cuda when a usable "
+                    "GPU is present)")
         ->capture_default_str()
         ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
     cmd->add_flag("--ignore-radius-attribute", o.ignoreRadiusAttribute,

@@ -1,11 +1,13 @@
-// Backend.h - the one interface to where the field is computed (DESIGN.md, "Backends"): the CPU
-// (TBB) and CUDA implement the same abstract stages, and the pipeline (pipeline/Rasterize.cc)
-// talks to nothing else. A stage that needs another stage's work - band completion evaluating
-// the field at its new voxels - asks the backend, never that stage's internals.
+// Backend.h - the one interface to where the field is computed and meshed (DESIGN.md,
+// "Backends"): the CPU (TBB) and CUDA implement the same abstract stages, and the pipeline
+// (pipeline/Rasterize.cc, mesh/MeshLevelSet.cc) talks to nothing else. A stage that needs another
+// stage's work - band completion evaluating the field at its new voxels - asks the backend, never
+// that stage's internals.
 //
 //   narrowBand  neighbors -> classify -> narrow band -> field: the band with phi
 //   useParticles / evaluate   phi at the active voxels of any tree (band completion, the
 //               gather-full baseline), for the particles of the last narrowBand or useParticles
+//   marchingCubes   a level set's mesh (mesh/MarchingCubes.h; the same bytes on either)
 //
 // Selection, the Auto fallback and its reason live in one place too (selectBackend, runOn).
 #pragma once
@@ -14,6 +16,7 @@
 
 #include <fluidsurf/Context.h>
 #include <fluidsurf/Level.h>
+#include <fluidsurf/MeshLevelSet.h>
 #include <fluidsurf/Params.h>
 #include <fluidsurf/Rasterize.h>
 
@@ -67,6 +70,12 @@ public:
 
     /// The device's own stage times and peak memory (nothing for the CPU).
     virtual void deviceStats(RasterizeStats&) const {}
+
+    /// Our marching cubes of grid into out (timed in ctx under the backend's own stage names);
+    /// cells: the cells triangulated. Returns false, having done nothing, when this backend
+    /// cannot take the grid (the GPU's leaf keys).
+    virtual bool marchingCubes(const openvdb::FloatGrid& grid, RawNormals normals, Context& ctx,
+                               TriangleMesh& out, size_t& cells) = 0;
 };
 
 std::unique_ptr<Backend> makeCpuBackend();
@@ -79,8 +88,14 @@ bool cudaUsable(std::string* reason = nullptr, std::string* deviceName = nullptr
 
 /// Run work on the backend that ctx.device() asks for: Cpu; Cuda (Error when there is no usable
 /// GPU); Auto (the GPU when usable, else the CPU). With Auto, a CUDA failure other than bad input
-/// or a cancel reruns work on the CPU, and the reason goes into stats.device. gpuProbe is the
-/// answer of cudaUsable started earlier (the caller overlaps it with its own checks).
+/// or a cancel calls fallingBack (if given) and reruns work on the CPU. ranOn: the backend's
+/// name, or "cpu (CUDA failed: ...)". gpuUsable and gpuReason are cudaUsable's answer (the
+/// caller may overlap it with its own checks).
+void runOn(Device device, bool gpuUsable, const std::string& gpuReason, std::string& ranOn,
+           const std::function<void(Backend&)>& work,
+           const std::function<void()>& fallingBack = nullptr);
+
+/// The same for the field: stats.device, and the device's own stage times.
 void runOn(Device device, bool gpuUsable, const std::string& gpuReason, RasterizeStats& stats,
            const std::function<void(Backend&)>& work);
 

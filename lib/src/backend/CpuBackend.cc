@@ -3,6 +3,7 @@
 #include "backend/Backend.h"
 #include "backend/CpuStages.h"
 #include "field/GatherField.h"
+#include "mesh/MarchingCubes.h"
 #include "narrowband/NarrowBand.h"
 
 #include <algorithm>
@@ -78,6 +79,13 @@ public:
     {
         if (!mParticles) throw Error("CPU backend: evaluate() before the particles were given");
         return field::evaluateField(tree, *mParticles, params, level, ctx);
+    }
+
+    bool marchingCubes(const openvdb::FloatGrid& grid, RawNormals normals, Context& ctx,
+                       TriangleMesh& out, size_t& cells) override
+    {
+        out = mesh::marchingCubes(grid, ctx, &cells, normals);
+        return true;
     }
 
 private:

@@ -8,9 +8,12 @@
 
 #ifdef FLUIDSURF_HAS_CUDA
 #include "classify/Classify.h"
+#include "mesh/MarchingCubes.h"
+#include "util/Memory.h"
 
 #include "facade/Device.h"
 #include "facade/FieldGather.h"
+#include "facade/MarchingCubes.h"
 #include "facade/NarrowBandPipeline.h"
 
 #include <openvdb/tree/LeafManager.h>
@@ -104,6 +107,64 @@ openvdb::FloatTree::Ptr treeFromBlocks(const cuda::LeafBlocks& blocks, float bac
         tree->addLeaf(leaf.release()); // the tree takes ownership
     return tree;
 }
+
+/// A tree's leaves as the GPU mesher's plain arrays (facade/MarchingCubes.h), gathered in
+/// parallel; false where they span more leaves than its keys hold.
+struct MeshLeaves
+{
+    std::vector<int32_t> origins;
+    std::vector<uint64_t> active, valueStart;
+    std::vector<float> values;
+
+    bool gather(const openvdb::FloatTree& tree, cuda::MeshInput& in, Context& ctx)
+    {
+        openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(tree);
+        const size_t n = leaves.leafCount();
+        origins.resize(3 * n), active.resize(8 * n), valueStart.assign(n + 1, 0);
+        int32_t lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+        for (size_t i = 0; i < n; ++i) // the bounds first: serial, 3 compares a leaf
+            for (int a = 0; a < 3; ++a) {
+                const int32_t c = leaves.leaf(i).origin()[a] >> 3;
+                lo[a] = i ? std::min(lo[a], c) : c, hi[a] = i ? std::max(hi[a], c) : c;
+            }
+        if (n && !cuda::leafKeysFit(lo, hi)) return false;
+        tbb::parallel_for(
+            tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& r) {
+                ctx.checkpoint();
+                for (size_t i = r.begin(); i != r.end(); ++i) {
+                    const LeafT& leaf = leaves.leaf(i);
+                    uint64_t count = 0;
+                    for (int a = 0; a < 3; ++a)
+                        origins[3 * i + a] = leaf.origin()[a];
+                    for (int w = 0; w < 8; ++w) {
+                        const uint64_t word = leaf.getValueMask().template getWord<uint64_t>(w);
+                        active[8 * i + w] = word;
+                        count += uint64_t(__builtin_popcountll(word));
+                    }
+                    valueStart[i + 1] = count;
+                }
+            });
+        for (size_t i = 0; i < n; ++i)
+            valueStart[i + 1] += valueStart[i];
+        util::resizeInParallel(values, valueStart[n]);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256),
+                          [&](const tbb::blocked_range<size_t>& r) {
+                              for (size_t i = r.begin(); i != r.end(); ++i) {
+                                  const float* buffer = leaves.leaf(i).buffer().data();
+                                  float* out = &values[valueStart[i]];
+                                  for (int w = 0; w < 8; ++w)
+                                      for (uint64_t b = active[8 * i + w]; b; b &= b - 1)
+                                          *out++ = buffer[64 * w + __builtin_ctzll(b)];
+                              }
+                          });
+        in.leafOrigins = origins.data(), in.leafActive = active.data();
+        in.valueStart = valueStart.data(), in.values = values.data();
+        in.leafCount = n;
+        for (int a = 0; a < 3; ++a)
+            in.keyOrigin[a] = lo[a];
+        return true;
+    }
+};
 
 class CudaBackend : public Backend
 {
@@ -232,6 +293,47 @@ public:
             stats.gpuStages = mGatherStages;
             stats.gpuBytes = mGatherBytes;
         }
+    }
+
+    bool marchingCubes(const openvdb::FloatGrid& grid, RawNormals normals, Context& ctx,
+                       TriangleMesh& out, size_t& cells) override
+    {
+        openvdb::FloatTree::Ptr voxelized;
+        const openvdb::FloatTree& tree = mesh::leafOnlyTree(grid, voxelized);
+        cuda::MeshInput in;
+        MeshLeaves leaves;
+        {
+            const auto t = ctx.scope("gather");
+            if (!leaves.gather(tree, in, ctx)) return false;
+        }
+        const mesh::Affine affine(grid.transform());
+        const openvdb::Mat3d linearT = affine.linear.transpose(),
+                             jacobianT = affine.jacobianInverse.transpose();
+        for (int k = 0; k < 9; ++k)
+            in.linearT[k] = linearT.asPointer()[k],
+            in.jacobianInverseT[k] = jacobianT.asPointer()[k];
+        for (int a = 0; a < 3; ++a)
+            in.translation[a] = affine.translation[a];
+        in.normals = normals == RawNormals::Gradient;
+        ctx.throwIfCancelled();
+        TriangleMesh mesh;
+        {
+            const auto t = ctx.scope("device mesh");
+            cuda::MarchingCubesRun run(in);
+            leaves = MeshLeaves(); // on the device now
+            const uint64_t vertices = run.vertexCount();
+            mesh::checkVertexCount(vertices);
+            util::resizeInParallel(mesh.points, vertices);
+            if (in.normals) util::resizeInParallel(mesh.normals, vertices);
+            util::resizeInParallel(mesh.triangles, run.triangleCount());
+            static_assert(sizeof(mesh.triangles[0]) == 3 * sizeof(uint32_t), "3 indices");
+            run.finish(mesh.points.data(), in.normals ? mesh.normals.data() : nullptr,
+                       mesh.triangles.empty() ? nullptr : mesh.triangles[0].data());
+            cells = run.cellCount();
+        }
+        mesh::dropUnusedVertices(mesh, ctx);
+        out = std::move(mesh);
+        return true;
     }
 
 private:

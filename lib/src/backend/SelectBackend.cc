@@ -41,22 +41,21 @@ void waitForDevice()
 
 namespace backend {
 
-void runOn(Device device, bool gpuUsable, const std::string& gpuReason, RasterizeStats& stats,
-           const std::function<void(Backend&)>& work)
+void runOn(Device device, bool gpuUsable, const std::string& gpuReason, std::string& ranOn,
+           const std::function<void(Backend&)>& work, const std::function<void()>& fallingBack)
 {
     if (device == Device::Cuda && !gpuUsable)
         throw Error("CUDA was requested but there is no usable GPU: " + gpuReason);
     if (device == Device::Cpu || !gpuUsable) {
         const std::unique_ptr<Backend> cpu = makeCpuBackend();
-        stats.device = cpu->name();
+        ranOn = cpu->name();
         work(*cpu);
         return;
     }
     const std::unique_ptr<Backend> gpu = makeCudaBackend();
     try {
-        stats.device = gpu->name();
+        ranOn = gpu->name();
         work(*gpu);
-        gpu->deviceStats(stats);
     } catch (const ValueError&) {
         throw; // the input's fault: the CPU would say the same
     } catch (const Cancelled&) {
@@ -66,10 +65,22 @@ void runOn(Device device, bool gpuUsable, const std::string& gpuReason, Rasteriz
         // takes over and says why; an explicit cuda request reports the failure.
         if (device == Device::Cuda) throw;
         const std::unique_ptr<Backend> cpu = makeCpuBackend();
-        stats.device = std::string("cpu (CUDA failed: ") + e.what() + ")";
-        stats.gpuStages.clear(), stats.gpuBytes = 0;
+        ranOn = std::string("cpu (CUDA failed: ") + e.what() + ")";
+        if (fallingBack) fallingBack();
         work(*cpu);
     }
+}
+
+void runOn(Device device, bool gpuUsable, const std::string& gpuReason, RasterizeStats& stats,
+           const std::function<void(Backend&)>& work)
+{
+    runOn(
+        device, gpuUsable, gpuReason, stats.device,
+        [&](Backend& b) {
+            work(b);
+            b.deviceStats(stats); // nothing for the CPU
+        },
+        [&] { stats.gpuStages.clear(), stats.gpuBytes = 0; });
 }
 
 } // namespace backend

@@ -9,9 +9,14 @@
 // of a face compute from the same four values. That choice also follows the bilinear function
 // itself: a face whose values were sub-sampled bilinearly from a coarser face (the adaptive
 // grid's transition faces, thesis Fig. 6.4) is cut into the same pieces on both resolutions.
+//
+// The GPU mesher (cuda/src/MarchingCubes.cu) compiles this header too (FLUIDSURF_HD), so both
+// backends cut a cell the same way; device code cannot index host arrays, so what the polygons
+// need of the tables below is also packed into integers (checked against the tables at compile
+// time).
 #pragma once
 
-#include <algorithm>
+#include "util/HostDevice.h"
 
 namespace fluidsurf {
 namespace mesh {
@@ -27,9 +32,9 @@ constexpr int kFace[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
 // corner and axis locate the grid edge (and so the vertex) it shares with other cells.
 struct EdgeTable
 {
-    int index[8][8];
-    int lowCorner[12], axis[12];
-    EdgeTable()
+    int index[8][8] = {};
+    int lowCorner[12] = {}, axis[12] = {};
+    constexpr EdgeTable()
     {
         int n = 0;
         for (int a = 0; a < 8; ++a)
@@ -45,21 +50,62 @@ struct EdgeTable
             }
     }
 };
-inline const EdgeTable kEdges;
+inline constexpr EdgeTable kEdges{};
+
+/// kFace[f][k], 4 bits a corner, 16 a face.
+FLUIDSURF_HD constexpr int faceCorner(int f, int k)
+{
+    return f < 4 ? int(0x3762451057312640ull >> (16 * f + 4 * k) & 15)
+                 : int(0x67541320u >> (16 * (f - 4) + 4 * k) & 15);
+}
+/// kEdges.index[a][b] for corners a, b that differ in one bit: the edges are numbered by lower
+/// corner, then axis (EdgeTable's loop); 4 bits a corner give the first edge of each.
+FLUIDSURF_HD constexpr int edgeIndex(int a, int b)
+{
+    const int low = a & b, d = a ^ b;      // d: the axis' bit
+    const int clearBelow = ~low & (d - 1); // the low corner's clear bits below the axis
+    return int(0xCBA87530u >> (4 * low) & 15) + (clearBelow & 1) + (clearBelow >> 1 & 1);
+}
+/// kEdges.lowCorner[e] and kEdges.axis[e], 4 and 2 bits an edge.
+FLUIDSURF_HD constexpr int edgeLowCorner(int e)
+{
+    return int(0x654432211000ull >> (4 * e) & 15);
+}
+FLUIDSURF_HD constexpr int edgeAxis(int e)
+{
+    return int(0x14A264u >> (2 * e) & 3);
+}
+
+namespace detail {
+constexpr bool packedTablesAgree()
+{
+    for (int f = 0; f < 6; ++f)
+        for (int k = 0; k < 4; ++k)
+            if (faceCorner(f, k) != kFace[f][k]) return false;
+    for (int a = 0; a < 8; ++a)
+        for (int b = 0; b < 8; ++b)
+            if (kEdges.index[a][b] >= 0 && edgeIndex(a, b) != kEdges.index[a][b]) return false;
+    for (int e = 0; e < 12; ++e)
+        if (edgeLowCorner(e) != kEdges.lowCorner[e] || edgeAxis(e) != kEdges.axis[e]) return false;
+    return true;
+}
+static_assert(packedTablesAgree(), "the packed cell tables differ from kFace / kEdges");
+} // namespace detail
 
 // Crossing points are kept off the corners: a corner value of exactly 0 would otherwise put
 // several vertices on one point and leave zero-area triangles.
 constexpr double kEdgeMargin = 1e-3;
 
-inline bool inside(float v)
+FLUIDSURF_HD inline bool inside(float v)
 {
     return v < 0;
 }
 
 /// Where the zero crossing lies on an edge from value a to value b, as a fraction of the edge.
-inline double crossing(float a, float b)
+FLUIDSURF_HD inline double crossing(float a, float b)
 {
-    return std::clamp(double(a) / (double(a) - double(b)), kEdgeMargin, 1 - kEdgeMargin);
+    const double t = double(a) / (double(a) - double(b));
+    return t < kEdgeMargin ? kEdgeMargin : 1 - kEdgeMargin < t ? 1 - kEdgeMargin : t; // std::clamp
 }
 
 /// The polygons of a cell: next[e] is the edge after crossing edge e on its polygon (-1: e has
@@ -71,11 +117,13 @@ struct CellPolygons
     /// in both cells of the face (an edge with four triangles); such cells fan around a centre.
     bool ambiguous = false;
 
-    explicit CellPolygons(const float c[8])
+    FLUIDSURF_HD explicit CellPolygons(const float c[8])
     {
-        std::fill(next, next + 12, -1);
+        for (int e = 0; e < 12; ++e)
+            next[e] = -1;
         for (int f = 0; f < 6; ++f) {
-            const int* corners = kFace[f];
+            const int corners[4] = {faceCorner(f, 0), faceCorner(f, 1), faceCorner(f, 2),
+                                    faceCorner(f, 3)};
             int enter[2], leave[2], ne = 0, nl = 0;
             for (int k = 0; k < 4; ++k) {
                 const int a = corners[k], b = corners[(k + 1) & 3];
@@ -86,7 +134,7 @@ struct CellPolygons
                     leave[nl++] = k;
             }
             if (ne == 0) continue;
-            auto edge = [&](int k) { return kEdges.index[corners[k]][corners[(k + 1) & 3]]; };
+            auto edge = [&](int k) { return edgeIndex(corners[k], corners[(k + 1) & 3]); };
             if (ne == 1) {
                 next[edge(enter[0])] = edge(leave[0]), face[edge(enter[0])] = f;
                 continue;
@@ -103,7 +151,7 @@ struct CellPolygons
     }
 
     /// Calls polygon(edges, n) for each closed polygon, its crossing edges in order.
-    template <typename F> void forEach(F&& polygon) const
+    template <typename F> FLUIDSURF_HD void forEach(F&& polygon) const
     {
         bool done[12] = {};
         for (int start = 0; start < 12; ++start) {

@@ -2,6 +2,8 @@
 // (thesis eq. 4.10-4.12: central differences; one-sided where a neighbour is outside the band).
 #pragma once
 
+#include "mesh/GradientMath.h"
+
 #include <openvdb/openvdb.h>
 
 namespace fluidsurf {
@@ -21,12 +23,7 @@ inline openvdb::Vec3d activeGradient(const openvdb::Coord& ijk, float center, Re
         lo[a] -= 1, hi[a] += 1;
         float vlo = 0, vhi = 0;
         const bool onLo = read(lo, a, vlo), onHi = read(hi, a, vhi);
-        if (onLo && onHi)
-            g[a] = 0.5 * (double(vhi) - double(vlo));
-        else if (onHi)
-            g[a] = double(vhi) - double(center);
-        else if (onLo)
-            g[a] = double(center) - double(vlo);
+        g[a] = centralDifference(onLo, vlo, onHi, vhi, center);
     }
     return g;
 }

@@ -70,23 +70,6 @@ inline bool probe(const FloatLeaf& leaf, FloatAccessor& acc, int x, int y, int z
     return acc.probeValue(leaf.origin() + Coord(x, y, z), v);
 }
 
-/// Vertex numbers are 32 bits; the meshes here stay under 2^31 vertices.
-constexpr uint64_t kMaxVertices = 0x80000000u;
-
-/// (OpenVDB maps multiply row vectors, p * M; below as M^T * p.)
-struct Affine
-{
-    openvdb::Mat3d linear, jacobianInverse;
-    openvdb::Vec3d translation;
-    explicit Affine(const openvdb::math::Transform& xform)
-    {
-        const openvdb::math::AffineMap::Ptr map = xform.baseMap()->getAffineMap();
-        const openvdb::Mat4d m = map->getMat4();
-        linear = m.getMat3(), translation = m.getTranslation(),
-        jacobianInverse = map->getConstJacobianInv();
-    }
-};
-
 /// Where a leaf's cells go: counted (pass 2), then written at the leaf's place in the mesh
 /// (pass 4). Triangulated into per-leaf pieces and joined after, the pieces and the mesh were
 /// both resident at the stage's peak (46 MB of pieces on the 1.7M-particle frame).
@@ -463,10 +446,35 @@ struct Passes
     }
 };
 
-/// Drop vertices no triangle uses and renumber (order kept). As a rule there are none (band
-/// completion closes every cell around a crossing edge), and the marks and their count, on all
-/// threads, are then all there is to it: serially they were 4% of marching cubes on two cores
-/// (14 ms of the 13.1M drop's 0.34 s), and more of it on sixteen.
+} // namespace
+
+Affine::Affine(const openvdb::math::Transform& xform)
+{
+    const openvdb::math::AffineMap::Ptr map = xform.baseMap()->getAffineMap();
+    const openvdb::Mat4d m = map->getMat4();
+    linear = m.getMat3(), translation = m.getTranslation(),
+    jacobianInverse = map->getConstJacobianInv();
+}
+
+const openvdb::FloatTree& leafOnlyTree(const openvdb::FloatGrid& grid,
+                                       openvdb::FloatTree::Ptr& keep)
+{
+    if (!grid.tree().hasActiveTiles()) return grid.tree();
+    keep = std::make_shared<FloatTree>(grid.tree());
+    keep->voxelizeActiveTiles();
+    return *keep;
+}
+
+void checkVertexCount(uint64_t vertices)
+{
+    // Vertex numbers are 32 bits; the meshes here stay under 2^31 vertices.
+    if (vertices >= 0x80000000u)
+        throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");
+}
+
+// As a rule no vertex is unused (band completion closes every cell around a crossing edge), and
+// the marks and their count, on all threads, are then all there is to it: serially they were 4%
+// of marching cubes on two cores (14 ms of the 13.1M drop's 0.34 s), and more of it on sixteen.
 void dropUnusedVertices(TriangleMesh& mesh, Context& ctx)
 {
     std::vector<uint32_t> map(mesh.points.size(), 0);
@@ -503,19 +511,12 @@ void dropUnusedVertices(TriangleMesh& mesh, Context& ctx)
                       });
 }
 
-} // namespace
-
 TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t* surfaceCells,
                            RawNormals normals)
 {
-    // Active tiles (rare in level sets) become voxels so that every active value is a leaf voxel.
+    // Active tiles become voxels so that every active value is a leaf voxel.
     openvdb::FloatTree::Ptr voxelized;
-    const FloatTree* tree = &grid.tree();
-    if (tree->hasActiveTiles()) {
-        voxelized = std::make_shared<FloatTree>(*tree);
-        voxelized->voxelizeActiveTiles();
-        tree = voxelized.get();
-    }
+    const FloatTree* tree = &leafOnlyTree(grid, voxelized);
     Leaves leaves(*tree);
     Passes passes{*tree, Affine(grid.transform()), leaves, ctx, {}, {}, {}, {}, {}, {}};
     TriangleMesh mesh;
@@ -524,8 +525,7 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
     const size_t cells = passes.countCells();
     // the centre vertices come after the edge vertices
     const uint64_t vertices = passes.first.back() + passes.centreStart.back();
-    if (vertices >= kMaxVertices)
-        throw ValueError("the level set has more than 2^31 surface vertices; mesh it in parts");
+    checkVertexCount(vertices);
     util::resizeInParallel(mesh.points, vertices);
     if (normals == RawNormals::Gradient) util::resizeInParallel(mesh.normals, vertices);
     passes.placeVertices(mesh);

@@ -19,6 +19,8 @@
 
 #include <fluidsurf/MeshLevelSet.h>
 
+#include <cstdint>
+
 namespace fluidsurf {
 namespace mesh {
 
@@ -26,6 +28,27 @@ namespace mesh {
 TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx,
                            size_t* surfaceCells = nullptr,
                            RawNormals normals = RawNormals::Gradient);
+
+/// The grid's index -> world map as the passes apply it (OpenVDB maps multiply row vectors,
+/// p * M; the passes compute M^T * p + translation, and M^-T * gradient for normals), for the
+/// GPU mesher too, which repeats the same arithmetic.
+struct Affine
+{
+    openvdb::Mat3d linear, jacobianInverse;
+    openvdb::Vec3d translation;
+    explicit Affine(const openvdb::math::Transform& xform);
+};
+
+/// The tree the passes mesh: grid's, or a copy with its active tiles made voxels (rare in level
+/// sets), held in keep.
+const openvdb::FloatTree& leafOnlyTree(const openvdb::FloatGrid& grid,
+                                       openvdb::FloatTree::Ptr& keep);
+
+/// ValueError where a mesh would have 2^31 vertices or more (vertex numbers are 32 bits).
+void checkVertexCount(uint64_t vertices);
+
+/// Drop vertices no triangle uses and renumber them (order kept): the passes' last step.
+void dropUnusedVertices(TriangleMesh& mesh, Context& ctx);
 
 } // namespace mesh
 } // namespace fluidsurf

@@ -2,6 +2,7 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshLevelSet.h>
 
+#include "backend/Backend.h"
 #include "mesh/MarchingCubes.h"
 #include "mesh/VolumeToMesh.h"
 
@@ -29,13 +30,25 @@ TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, Context
                          "' has a non-linear (frustum) transform; only linear ones are meshed");
     const auto timer = ctx.scope("mesh");
     size_t cells = 0;
+    std::string device = "cpu";
     TriangleMesh m = util::withThreads(ctx, [&] {
-        if (mesher == Mesher::MarchingCubes) return mesh::marchingCubes(grid, ctx, &cells, normals);
+        if (mesher == Mesher::MarchingCubes) {
+            std::string reason;
+            const bool gpu = ctx.device() != Device::Cpu && backend::cudaUsable(&reason);
+            TriangleMesh mc;
+            backend::runOn(ctx.device(), gpu, reason, device, [&](backend::Backend& b) {
+                if (b.marchingCubes(grid, normals, ctx, mc, cells)) return;
+                mc = mesh::marchingCubes(grid, ctx, &cells, normals);
+                device = "cpu (the band lies beyond the GPU's leaf keys)";
+            });
+            return mc;
+        }
         TriangleMesh vdb = mesh::openvdbVolumeToMesh(grid, ctx);
         if (normals == RawNormals::None) std::vector<Vec3f>().swap(vdb.normals);
         return vdb;
     });
     if (stats) {
+        stats->device = device;
         stats->surfaceCells = cells;
         stats->vertices = m.points.size();
         stats->triangles = m.triangles.size();
