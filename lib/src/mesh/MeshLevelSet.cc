@@ -34,7 +34,11 @@ TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, Context
     TriangleMesh m = util::withThreads(ctx, [&] {
         if (mesher == Mesher::MarchingCubes) {
             std::string reason;
-            const bool gpu = ctx.device() != Device::Cpu && backend::cudaUsable(&reason);
+            bool gpu = false;
+            if (ctx.device() != Device::Cpu) {
+                const auto t = ctx.scope("cuda context"); // made once; waited for, if under way
+                gpu = backend::cudaUsable(&reason);
+            }
             TriangleMesh mc;
             backend::runOn(ctx.device(), gpu, reason, device, [&](backend::Backend& b) {
                 if (b.marchingCubes(grid, normals, ctx, mc, cells)) return;
