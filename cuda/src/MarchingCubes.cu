@@ -5,6 +5,7 @@
 #include "facade/MarchingCubes.h"
 
 #include "DeviceMemory.cuh"
+#include "LeafKeys.cuh"
 #include "mesh/CellPolygons.h"
 #include "mesh/GradientMath.h"
 
@@ -130,7 +131,7 @@ struct Mesh
 // --- set-up
 // ---------------------------------------------------------------------------------------
 
-__global__ void leafKeys(const int32_t* origins, size_t n, int3 keyOrigin, uint64_t* keys,
+__global__ void leafKeys(const int32_t* origins, size_t n, int3 keyOrigin, unsigned long long* keys,
                          uint32_t* index)
 {
     const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
@@ -143,7 +144,7 @@ __global__ void leafKeys(const int32_t* origins, size_t n, int3 keyOrigin, uint6
 }
 
 __global__ void findNeighbours(const int32_t* origins, size_t n, int3 keyOrigin,
-                               const uint64_t* sortedKeys, const uint32_t* sortedIndex,
+                               const unsigned long long* sortedKeys, const uint32_t* sortedIndex,
                                int* neighbours)
 {
     const size_t i = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
@@ -155,17 +156,11 @@ __global__ void findNeighbours(const int32_t* origins, size_t n, int3 keyOrigin,
         const int x = lx + k % 3 - 1, y = ly + k / 3 % 3 - 1, z = lz + k / 9 - 1;
         int found = -1;
         if (x >= 0 && y >= 0 && z >= 0) {
-            const uint64_t key =
-                uint64_t(x) | uint64_t(y) << kKeyBits | uint64_t(z) << (2 * kKeyBits);
-            size_t lo = 0, hi = n;
-            while (lo < hi) {
-                const size_t mid = (lo + hi) / 2;
-                if (sortedKeys[mid] < key)
-                    lo = mid + 1;
-                else
-                    hi = mid;
-            }
-            if (lo < n && sortedKeys[lo] == key) found = int(sortedIndex[lo]);
+            const unsigned long long key = (unsigned long long)x |
+                                           (unsigned long long)y << kKeyBits |
+                                           (unsigned long long)z << (2 * kKeyBits);
+            const long long at = findLeaf(sortedKeys, n, key);
+            if (at >= 0) found = int(sortedIndex[at]);
         }
         neighbours[i * 27 + k] = found;
     }
@@ -504,8 +499,8 @@ MarchingCubesRun::MarchingCubesRun(const MeshInput& input, void* stream) : mImpl
     const int3 keyOrigin = make_int3(input.keyOrigin[0], input.keyOrigin[1], input.keyOrigin[2]);
 
     // Each leaf's neighbours: keys sorted, then 27 binary searches a leaf.
-    uint64_t* keys = mem.alloc<uint64_t>(n);
-    uint64_t* sortedKeys = mem.alloc<uint64_t>(n);
+    unsigned long long* keys = mem.alloc<unsigned long long>(n);
+    unsigned long long* sortedKeys = mem.alloc<unsigned long long>(n);
     uint32_t* index = mem.alloc<uint32_t>(n);
     uint32_t* sortedIndex = mem.alloc<uint32_t>(n);
     leafKeys<<<gridFor(n), kBlock, 0, s>>>(origins, n, keyOrigin, keys, index);

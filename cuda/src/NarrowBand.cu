@@ -7,6 +7,7 @@
 // its box inside each of its leaves into that leaf's 8 mask words: the box's (y, z) rectangle is
 // one 64-bit pattern, the same for every x row. Compiled without FMA contraction so the voxel
 // ranges round exactly as on the CPU.
+#include "LeafKeys.cuh"
 #include "Stages.cuh"
 
 #include <cub/device/device_radix_sort.cuh>
@@ -77,20 +78,6 @@ __global__ void writeLeavesKernel(DeviceCells c, const uint8_t* __restrict__ cla
         for (int ly = lo[1] >> 3; ly <= hi[1] >> 3; ++ly)
             for (int lz = lo[2] >> 3; lz <= hi[2] >> 3; ++lz)
                 keys[k++] = leafKey(lx, ly, lz);
-}
-
-__device__ __forceinline__ long long findLeaf(const unsigned long long* keys, size_t count,
-                                              unsigned long long key)
-{
-    size_t lo = 0, hi = count;
-    while (lo < hi) {
-        const size_t mid = (lo + hi) / 2;
-        if (keys[mid] < key)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo < count && keys[lo] == key ? (long long)lo : -1;
 }
 
 __global__ void maskKernel(DeviceCells c, const uint8_t* __restrict__ classes, BandSettings s,

@@ -19,4 +19,9 @@ struct TriangleMesh
     bool empty() const { return triangles.empty(); }
 };
 
+/// A mesher's vertex normals: from the field's gradient, or none (mesh.normals empty) for a mesh
+/// that post-processing will change anyway: it computes its own, and the gradients and 12 bytes
+/// a vertex are saved.
+enum class RawNormals { Gradient, None };
+
 } // namespace fluidsurf

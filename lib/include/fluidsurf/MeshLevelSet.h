@@ -26,11 +26,6 @@ namespace fluidsurf {
 
 enum class Mesher { MarchingCubes, OpenVdb };
 
-/// The raw mesh's vertex normals: from the field's gradient, or none (mesh.normals empty) for a
-/// mesh that post-processing will change anyway: it computes its own, and the gradients and 12
-/// bytes a vertex are saved.
-enum class RawNormals { Gradient, None };
-
 const char* mesherName(Mesher m);               ///< "mc" or "openvdb"
 Mesher mesherFromName(const std::string& name); ///< ValueError for an unknown name
 

@@ -16,7 +16,7 @@
 
 #include <fluidsurf/Context.h>
 #include <fluidsurf/Level.h>
-#include <fluidsurf/MeshLevelSet.h>
+#include <fluidsurf/Mesh.h>
 #include <fluidsurf/Params.h>
 #include <fluidsurf/Rasterize.h>
 

@@ -17,7 +17,10 @@
 // calls ctx.checkpoint() once per leaf range.
 #pragma once
 
-#include <fluidsurf/MeshLevelSet.h>
+#include <fluidsurf/Context.h>
+#include <fluidsurf/Mesh.h>
+
+#include <openvdb/openvdb.h>
 
 #include <cstdint>
 

@@ -2,7 +2,10 @@
 // quads split into two triangles, normals from the field gradient like our own mesher.
 #pragma once
 
-#include <fluidsurf/MeshLevelSet.h>
+#include <fluidsurf/Context.h>
+#include <fluidsurf/Mesh.h>
+
+#include <openvdb/openvdb.h>
 
 namespace fluidsurf {
 namespace mesh {

@@ -1,4 +1,5 @@
-// MeshLevelSet.cc - mesher choice; the mesh stage under the context's threads and timing.
+// MeshLevelSet.cc - the mesh stage (fluidsurf/MeshLevelSet.h): mesher choice, the backend that
+// runs marching cubes (backend/Backend.h), under the context's threads and timing.
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshLevelSet.h>
 
