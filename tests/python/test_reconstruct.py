@@ -62,6 +62,22 @@ def test_raw_matches_cli_raw_and_the_vdb_matches_rasterize(cli, tmp_path):
     np.testing.assert_array_equal(again.triangles, mesh.triangles)
 
 
+def test_level_set_mesh_on_the_gpu_is_the_cpus_or_a_clear_error(cli, tmp_path):
+    # device="cuda" meshes on the GPU, the CPU's mesh to the byte; without a usable GPU (CI)
+    # it says so
+    _, positions = block_xyz(cli, tmp_path, 8000)
+    ls = fluidsurf.rasterize(positions, R, voxel=0.5)
+    cpu = ls.mesh()
+    try:
+        gpu = ls.mesh(device="cuda")
+    except Exception as e:  # no usable GPU here
+        assert "CUDA" in str(e)
+        return
+    np.testing.assert_array_equal(gpu.vertices, cpu.vertices)
+    np.testing.assert_array_equal(gpu.normals, cpu.normals)
+    np.testing.assert_array_equal(gpu.triangles, cpu.triangles)
+
+
 def test_single_particle_level_set_is_the_sphere_of_radius_r():
     # keep_isolated: a lone particle is a sphere of radius r in the field: phi = |x - c| - r
     c = np.array([[0.1, 0.2, 0.3]])
