@@ -38,8 +38,9 @@ struct MeshInput
 /// Whether leaves spanning [lo, hi] (leaf coordinates, origin / 8) fit the device's keys.
 bool leafKeysFit(const int32_t lo[3], const int32_t hi[3]);
 
-/// One meshing: the constructor uploads and counts (edges, cells); finish() places the vertices,
-/// writes the triangles and downloads them. Throws fluidsurf::Error on CUDA errors.
+/// One meshing: the constructor uploads and counts (edges, cells), after which the input's
+/// arrays may be freed; finish() places the vertices, writes the triangles and downloads them.
+/// Throws fluidsurf::Error on CUDA errors.
 class MarchingCubesRun
 {
 public:

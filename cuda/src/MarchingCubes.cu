@@ -496,6 +496,10 @@ MarchingCubesRun::MarchingCubesRun(const MeshInput& input, void* stream) : mImpl
     const uint64_t* active = mem.upload(input.leafActive, 8 * n);
     const uint64_t* valueStart = mem.upload(input.valueStart, n + 1);
     const float* compact = mem.upload(input.values, size_t(input.valueStart[n]));
+    // the caller may free its arrays once this returns (the synchronisations below wait for the
+    // copies): keep no pointer to them
+    m.input.leafOrigins = nullptr, m.input.leafActive = nullptr;
+    m.input.valueStart = nullptr, m.input.values = nullptr;
     const int3 keyOrigin = make_int3(input.keyOrigin[0], input.keyOrigin[1], input.keyOrigin[2]);
 
     // Each leaf's neighbours: keys sorted, then 27 binary searches a leaf.
