@@ -322,9 +322,9 @@ __device__ void cell(int x, int y, int z, const float c[8], CellSink& out)
     if (out.writes)
         for (int e = 0; e < 12; ++e) {
             if (next[e] < 0) continue;
-            const int low = mesh::edgeLowCorner(e);
+            const int low = mesh::packed::edgeLowCorner(e);
             vertex[e] = out.vertex(x + (low & 1), y + (low >> 1 & 1), z + (low >> 2 & 1),
-                                   mesh::edgeAxis(e));
+                                   mesh::packed::edgeAxis(e));
         }
     polygons.forEach([&](const int* polygon, int n) {
         if (!ambiguous || n == 3) {

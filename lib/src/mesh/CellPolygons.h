@@ -77,37 +77,13 @@ FLUIDSURF_HD constexpr int edgeAxis(int e)
 }
 } // namespace packed
 
-/// kFace[f][k], kEdges.index[a][b], kEdges.lowCorner[e] and kEdges.axis[e] on either side.
-FLUIDSURF_HD inline int faceCorner(int f, int k)
-{
-#ifdef __CUDA_ARCH__
-    return packed::faceCorner(f, k);
-#else
-    return kFace[f][k];
-#endif
-}
+/// kEdges.index[a][b] on either side.
 FLUIDSURF_HD inline int edgeIndex(int a, int b)
 {
 #ifdef __CUDA_ARCH__
     return packed::edgeIndex(a, b);
 #else
     return kEdges.index[a][b];
-#endif
-}
-FLUIDSURF_HD inline int edgeLowCorner(int e)
-{
-#ifdef __CUDA_ARCH__
-    return packed::edgeLowCorner(e);
-#else
-    return kEdges.lowCorner[e];
-#endif
-}
-FLUIDSURF_HD inline int edgeAxis(int e)
-{
-#ifdef __CUDA_ARCH__
-    return packed::edgeAxis(e);
-#else
-    return kEdges.axis[e];
 #endif
 }
 
@@ -161,8 +137,8 @@ struct CellPolygons
             next[e] = -1;
         for (int f = 0; f < 6; ++f) {
 #ifdef __CUDA_ARCH__
-            const int corners[4] = {faceCorner(f, 0), faceCorner(f, 1), faceCorner(f, 2),
-                                    faceCorner(f, 3)};
+            const int corners[4] = {packed::faceCorner(f, 0), packed::faceCorner(f, 1),
+                                    packed::faceCorner(f, 2), packed::faceCorner(f, 3)};
 #else
             const int* corners = kFace[f]; // (a copy costs the host 9% more instructions here)
 #endif

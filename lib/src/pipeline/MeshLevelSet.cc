@@ -4,7 +4,6 @@
 #include <fluidsurf/MeshLevelSet.h>
 
 #include "backend/Backend.h"
-#include "mesh/MarchingCubes.h"
 #include "mesh/VolumeToMesh.h"
 
 #include "util/Threads.h"
@@ -43,7 +42,7 @@ TriangleMesh meshLevelSet(const openvdb::FloatGrid& grid, Mesher mesher, Context
             TriangleMesh mc;
             backend::runOn(ctx.device(), gpu, reason, device, [&](backend::Backend& b) {
                 if (b.marchingCubes(grid, normals, ctx, mc, cells)) return;
-                mc = mesh::marchingCubes(grid, ctx, &cells, normals);
+                backend::makeCpuBackend()->marchingCubes(grid, normals, ctx, mc, cells);
                 device = "cpu (the band lies beyond the GPU's leaf keys)";
             });
             return mc;
