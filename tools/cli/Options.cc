@@ -206,9 +206,9 @@ void addAttributesOption(CLI::App* cmd, PipelineOptions& o, const char* where)
         ->delimiter(',');
 }
 
-double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first)
+double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first, Context& ctx)
 {
-    const RadiusChoice c = chooseRadius(first, o.params.radius, !o.ignoreRadiusAttribute);
+    const RadiusChoice c = chooseRadius(first, o.params.radius, !o.ignoreRadiusAttribute, ctx);
     if (!o.quiet && c.source == RadiusSource::Attribute)
         std::printf("radius r = %g (%s)\n", c.radius, c.detail.c_str());
     if (!o.quiet && c.source == RadiusSource::Estimated)
@@ -261,7 +261,7 @@ ParticleSet readFrame(const PipelineOptions& o, Context& ctx, const std::string&
         ps = io::readParticles(path, read, &info);
     }
     stopIfInterrupted(ctx);
-    if (first) params.radius = chooseSequenceRadius(o, ps);
+    if (first) params.radius = chooseSequenceRadius(o, ps, ctx);
     return ps;
 }
 

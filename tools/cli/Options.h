@@ -51,8 +51,9 @@ void addRunOptions(CLI::App* cmd, PipelineOptions& o, Makes makes);
 /// --attributes NAME,...: particle attributes carried onto the output; where says where to.
 void addAttributesOption(CLI::App* cmd, PipelineOptions& o, const char* where);
 
-/// r for a sequence from its first frame, printed with its source (an estimate as "ESTIMATE").
-double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first);
+/// r for a sequence from its first frame, printed with its source (an estimate as "ESTIMATE");
+/// the estimate is timed in ctx.
+double chooseSequenceRadius(const PipelineOptions& o, const ParticleSet& first, Context& ctx);
 
 /// The start of every particle frame: a fresh timing tree, the timed read, a stop check, and on
 /// the first frame the sequence's radius into params.radius (one r for the whole sequence:

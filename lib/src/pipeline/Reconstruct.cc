@@ -7,6 +7,7 @@
 
 #include "post/IsolatedSpheres.h"
 #include "util/Memory.h"
+#include "util/Threads.h"
 
 #include <algorithm>
 #include <cmath>
@@ -77,6 +78,12 @@ const char* radiusSourceName(RadiusSource s)
 
 RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute)
 {
+    Context ctx;
+    return chooseRadius(ps, given, useAttribute, ctx);
+}
+
+RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute, Context& ctx)
+{
     RadiusChoice c;
     if (given > 0) {
         c.radius = given, c.source = RadiusSource::Given, c.detail = "given";
@@ -92,7 +99,10 @@ RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute
                 return c;
             }
         }
-    const SpacingEstimate est = estimateSpacing(ps);
+    const SpacingEstimate est = [&] {
+        const auto t = ctx.scope("radius estimate");
+        return util::withThreads(ctx, [&] { return estimateSpacing(ps); });
+    }();
     if (!(est.radius > 0))
         throw ValueError("cannot estimate the particle radius (fewer than two particles, or all "
                          "isolated); give it (-r)");
@@ -108,7 +118,7 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
     validate(params.post);
     checkAttributeNames(particles, params.attributes); // before the work, not after it
     ReconstructResult res;
-    res.radius = chooseRadius(particles, params.radius, params.field.perParticleRadii);
+    res.radius = chooseRadius(particles, params.radius, params.field.perParticleRadii, ctx);
     RasterizeResult field =
         rasterizeParticles(particles, params.fieldParams(res.radius.radius), ctx, sourceName);
     ctx.throwIfCancelled();
