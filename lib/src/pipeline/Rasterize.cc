@@ -19,6 +19,9 @@
 #include <cmath>
 #include <future>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 namespace fluidsurf {
 
 namespace {
@@ -288,9 +291,19 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
     params.validate();
     ps.validate();
     openvdb::initialize();
-    for (size_t i = 0; i < ps.size(); ++i)
-        if (!ps.positions[i].isFinite())
-            throw ValueError("particle " + std::to_string(i) + " has a non-finite position");
+    // the first non-finite position, on all threads (one thread took 10 ms of the 13.1M drop)
+    const size_t bad = util::withThreads(ctx, [&] {
+        return tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, ps.size(), 65536), ps.size(),
+            [&](const tbb::blocked_range<size_t>& r, size_t first) {
+                for (size_t i = r.begin(); i < r.end() && i < first; ++i)
+                    if (!ps.positions[i].isFinite()) return i;
+                return first;
+            },
+            [](size_t a, size_t b) { return std::min(a, b); });
+    });
+    if (bad < ps.size())
+        throw ValueError("particle " + std::to_string(bad) + " has a non-finite position");
     if (ctx.device() == Device::Cuda && params.method == FieldMethod::Scatter)
         throw ValueError("the scatter baseline runs on the CPU only (--device cpu)");
     return util::withThreads(ctx, [&] { return rasterize(ps, params, ctx, source); });

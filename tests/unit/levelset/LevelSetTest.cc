@@ -8,6 +8,8 @@
 
 #include <openvdb/openvdb.h>
 
+#include <limits>
+
 using namespace fluidsurf;
 using namespace fluidsurf::test;
 
@@ -62,6 +64,30 @@ TEST(LevelSet, WriteFailureLeavesNothing)
     const RasterizeResult res =
         rasterizeParticles(generateScene(Scene::Block, sp), Params::fromRadius(sp.radius));
     EXPECT_THROW(io::writeLevelSet({res.grid}, "/nonexistent-folder/x.vdb"), OutputError);
+}
+
+TEST(LevelSet, NonFinitePositionsAreRejectedByTheFirstOne)
+{
+    // 400,000 particles (several ranges of the parallel check), two of them not finite: the
+    // error names the lower index, wherever the threads found them first.
+    ParticleSet ps;
+    for (int i = 0; i < 400000; ++i)
+        ps.positions.emplace_back(0.01f * float(i % 100), 0.01f * float(i / 100 % 100),
+                                  0.01f * float(i / 10000));
+    ps.positions[312345].z = std::numeric_limits<float>::infinity();
+    ps.positions[270001].y = std::numeric_limits<float>::quiet_NaN();
+    for (int threads : {1, 4}) {
+        Context ctx;
+        ctx.setThreads(threads);
+        try {
+            rasterizeParticles(ps, Params::fromRadius(0.005), ctx);
+            ADD_FAILURE() << "no error";
+        } catch (const ValueError& e) {
+            EXPECT_NE(std::string(e.what()).find("particle 270001 has a non-finite position"),
+                      std::string::npos)
+                << e.what();
+        }
+    }
 }
 
 TEST(LevelSet, InvalidParametersAreRejected)
