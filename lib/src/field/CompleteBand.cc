@@ -50,24 +50,27 @@ struct FrontierFinder
             // through the accessor.
             const FloatLeaf* home = tree.probeConstLeaf(leaf->origin());
             Directions dirs = frontierCandidates(*home, threshold, acc);
-            const Words active = activeWords(*home);
-            const std::array<Words, 3> full = fullStencils(active);
+            // only the scanned voxels' (after the first round, those the last one added: a
+            // leaf whose new voxels have nothing to find needs no shell of neighbours)
+            uint64_t any = 0;
+            for (Words& d : dirs)
+                for (int x = 0; x < 8; ++x)
+                    any |= d[x] &= leaf->getValueMask().template getWord<uint64_t>(x);
+            if (!any) continue;
+            const EdgeStencils stencils = edgeStencils(activeShell(*home, acc));
+            const std::array<Words, 3>& full = stencils.full;
             // Passed over a word at a time, as the loop below would pass them one by one: an
             // edge whose 18 corners are all active (full: its far end is active, so only a sign
             // change can have put it here, and every corner it would add is there), from
             // either end; and, in the first round, the edges to an active neighbour at -1
             // (their crossings are taken from the other end). Most of the band's crossings
-            // are such edges.
-            for (int axis = 0; axis < 3; ++axis) {
-                int o[3] = {0, 0, 0};
-                o[axis] = -1;
-                const Words fullBelow = shiftedWords(full[axis], o[0], o[1], o[2]);
-                const Words activeBelow = shiftedWords(active, o[0], o[1], o[2]);
+            // are such edges; the neighbour leaves' voxels count (LeafBits.h).
+            for (int axis = 0; axis < 3; ++axis)
                 for (int x = 0; x < 8; ++x) {
                     dirs[2 * axis + 1][x] &= ~full[axis][x];
-                    dirs[2 * axis][x] &= ~(bothEnds ? fullBelow[x] : activeBelow[x]);
+                    dirs[2 * axis][x] &=
+                        ~(bothEnds ? stencils.fullBelow[axis][x] : stencils.activeBelow[axis][x]);
                 }
-            }
             Words keep{};
             for (const Words& d : dirs)
                 for (int x = 0; x < 8; ++x)
@@ -83,8 +86,7 @@ struct FrontierFinder
                 return acc.probeValue(m, w);
             };
             for (int x = 0; x < 8; ++x)
-                for (uint64_t bits = keep[x] & leaf->getValueMask().template getWord<uint64_t>(x);
-                     bits; bits &= bits - 1) {
+                for (uint64_t bits = keep[x]; bits; bits &= bits - 1) {
                     const int bit = __builtin_ctzll(bits);
                     const openvdb::Coord c = leaf->origin() + openvdb::Coord(x, bit >> 3, bit & 7);
                     const float value = home->getValue(openvdb::Index(64 * x + bit));

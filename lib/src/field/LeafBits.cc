@@ -19,14 +19,6 @@ struct LeafBits
     Words active{}, negative{}, near{};
 };
 
-Words activeOf(const LeafT& leaf)
-{
-    Words w;
-    for (int x = 0; x < 8; ++x)
-        w[x] = leaf.getValueMask().template getWord<uint64_t>(x);
-    return w;
-}
-
 LeafBits leafBits(const LeafT& leaf, float threshold)
 {
     const util::LeafWords words(leaf);
@@ -44,47 +36,100 @@ LeafBits leafBits(const LeafT& leaf, float threshold)
 
 } // namespace
 
-Words shiftedWords(const Words& w, int dx, int dy, int dz)
+ActiveShell activeShell(const FloatLeaf& home,
+                        openvdb::tree::ValueAccessor<const openvdb::FloatTree>& acc)
 {
-    Words out{};
-    for (int x = 0; x < 8; ++x) {
-        if (x + dx < 0 || x + dx > 7) continue;
-        uint64_t v = w[x + dx];
-        v = dy > 0 ? v >> 8 : dy < 0 ? v << 8 : v;
-        v = dz > 0 ? (v >> 1) & ~kZ7 : dz < 0 ? (v << 1) & ~kZ0 : v;
-        out[x] = v;
-    }
-    return out;
+    ActiveShell s; // (each neighbour ORs its bits in: an edge's row is also a face's)
+    auto word = [](const LeafT& leaf, int x) {
+        return leaf.getValueMask().template getWord<uint64_t>(x);
+    };
+    for (int x = 0; x < 8; ++x)
+        for (int y = 0; y < 8; ++y)
+            s.rows[x + 1][y + 1] = uint16_t((word(home, x) >> 8 * y & 0xff) << 1);
+    const uint64_t all = ~uint64_t(0);
+    for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz) {
+                if (!dx && !dy && !dz) continue;
+                const openvdb::Coord o = home.origin() + openvdb::Coord(8 * dx, 8 * dy, 8 * dz);
+                const LeafT* n = acc.probeConstLeaf(o);
+                if (!n && !acc.isValueOn(o)) continue; // nothing active there
+                // the neighbour's voxels next to home: x = 7 of the one at dx = -1, and so on
+                const int lx = dx < 0 ? 7 : 0, ly = dy < 0 ? 7 : 0, lz = dz < 0 ? 7 : 0;
+                const int sx = dx < 0 ? 0 : 9, sy = dy < 0 ? 0 : 9, sz = dz < 0 ? 0 : 9;
+                const int faces = !dx + !dy + !dz; // 2: a face, 1: an edge, 0: a corner
+                if (faces == 2 && dx) {            // an x face: one word
+                    const uint64_t w = n ? word(*n, lx) : all;
+                    for (int y = 0; y < 8; ++y)
+                        s.rows[sx][y + 1] |= uint16_t((w >> 8 * y & 0xff) << 1);
+                } else if (faces == 2 && dy) { // a y face: one byte of each word
+                    for (int x = 0; x < 8; ++x)
+                        s.rows[x + 1][sy] |=
+                            uint16_t(((n ? word(*n, x) : all) >> 8 * ly & 0xff) << 1);
+                } else if (faces == 2) { // a z face: one bit of each byte
+                    for (int x = 0; x < 8; ++x) {
+                        const uint64_t w = n ? word(*n, x) : all;
+                        for (int y = 0; y < 8; ++y)
+                            s.rows[x + 1][y + 1] |= uint16_t((w >> (8 * y + lz) & 1) << sz);
+                    }
+                } else { // an edge (8 voxels) or a corner (1)
+                    for (int i = 0; i < 8; ++i) {
+                        const int x = dx ? lx : i, y = dy ? ly : i, z = dz ? lz : i;
+                        if (n && !n->isValueOn(openvdb::Coord(x, y, z))) continue;
+                        s.rows[dx ? sx : x + 1][dy ? sy : y + 1] |=
+                            uint16_t(1 << (dz ? sz : z + 1));
+                        if (!faces) break;
+                    }
+                }
+            }
+    return s;
 }
 
-std::array<Words, 3> fullStencils(const Words& active)
+EdgeStencils edgeStencils(const ActiveShell& shell)
 {
-    // The 2x3x3 block of an edge along `axis` is separable: erode along each of the other two
-    // axes in turn (a voxel stays where both its neighbours along that axis are active), then
-    // along `axis` keep the voxels whose next one stayed too. 15 shifts of the words instead of
-    // 54 (the 18 corners per axis shifted one by one were a twelfth of the frontier scan).
-    auto erode = [](const Words& w, int axis) {
-        int o[3] = {0, 0, 0};
-        o[axis] = 1;
-        const Words up = shiftedWords(w, o[0], o[1], o[2]);
-        const Words down = shiftedWords(w, -o[0], -o[1], -o[2]);
-        Words out;
-        for (int x = 0; x < 8; ++x)
-            out[x] = w[x] & up[x] & down[x];
-        return out;
-    };
-    const Words line[3] = {erode(active, 0), erode(active, 1), erode(active, 2)};
-    std::array<Words, 3> full;
-    for (int axis = 0; axis < 3; ++axis) {
-        const int b = (axis + 1) % 3, d = (axis + 2) % 3;
-        const Words square = erode(line[b], d); // the 3x3 block across the axis
-        int o[3] = {0, 0, 0};
-        o[axis] = 1;
-        const Words next = shiftedWords(square, o[0], o[1], o[2]);
-        for (int x = 0; x < 8; ++x)
-            full[axis][x] = square[x] & next[x];
-    }
-    return full;
+    // Per row (x, y in [-1, 8]) of z bits (bit z + 1): three in a row along z (z - 1, z, z + 1)
+    // and two (z, z + 1); then the 18-corner blocks as ANDs of three rows across x or y.
+    uint32_t three[10][10], two[10][10];
+    for (int i = 0; i < 10; ++i)
+        for (int j = 0; j < 10; ++j) {
+            const uint32_t r = shell.rows[i][j];
+            three[i][j] = r & r >> 1 & r << 1, two[i][j] = r & r >> 1;
+        }
+    // acrossX[i][j]: three in a row along z at x - 1, x, x + 1 (i = x + 1, x in [0, 7]); acrossY
+    // likewise along y; twoSquare: two along z over the 3x3 rows around (x, y)
+    uint32_t acrossX[10][10] = {}, acrossY[10][10] = {}, twoSquare[10][10] = {};
+    for (int i = 1; i < 9; ++i)
+        for (int j = 0; j < 10; ++j)
+            acrossX[i][j] = three[i - 1][j] & three[i][j] & three[i + 1][j];
+    for (int i = 0; i < 10; ++i)
+        for (int j = 1; j < 9; ++j)
+            acrossY[i][j] = three[i][j - 1] & three[i][j] & three[i][j + 1];
+    for (int i = 1; i < 9; ++i)
+        for (int j = 1; j < 9; ++j)
+            twoSquare[i][j] = (two[i - 1][j - 1] & two[i - 1][j] & two[i - 1][j + 1]) &
+                              (two[i][j - 1] & two[i][j] & two[i][j + 1]) &
+                              (two[i + 1][j - 1] & two[i + 1][j] & two[i + 1][j + 1]);
+    auto byte = [](uint32_t r) { return uint64_t(r >> 1 & 0xff); }; // z = 0..7 as bits 0..7
+    EdgeStencils e{};
+    for (int x = 0; x < 8; ++x)
+        for (int y = 0; y < 8; ++y) {
+            const int i = x + 1, j = y + 1, at = 8 * y;
+            // the edge along x from (x, y): rows x and x + 1, each y - 1..y + 1
+            const uint32_t fullX = acrossY[i][j] & acrossY[i + 1][j],
+                           belowX = acrossY[i - 1][j] & acrossY[i][j];
+            const uint32_t fullY = acrossX[i][j] & acrossX[i][j + 1],
+                           belowY = acrossX[i][j - 1] & acrossX[i][j];
+            e.full[0][x] |= byte(fullX) << at;
+            e.full[1][x] |= byte(fullY) << at;
+            e.full[2][x] |= byte(twoSquare[i][j]) << at;
+            e.fullBelow[0][x] |= byte(belowX) << at;
+            e.fullBelow[1][x] |= byte(belowY) << at;
+            e.fullBelow[2][x] |= uint64_t(twoSquare[i][j] & 0xff) << at; // bit z: from z - 1
+            e.activeBelow[0][x] |= byte(shell.rows[i - 1][j]) << at;
+            e.activeBelow[1][x] |= byte(shell.rows[i][j - 1]) << at;
+            e.activeBelow[2][x] |= uint64_t(shell.rows[i][j] & 0xff) << at;
+        }
+    return e;
 }
 
 namespace {
@@ -113,11 +158,6 @@ LeafBits faceBits(const LeafT& leaf, int axis, int step)
 }
 
 } // namespace
-
-Words activeWords(const FloatLeaf& leaf)
-{
-    return activeOf(leaf);
-}
 
 Directions frontierCandidates(const FloatLeaf& home, float threshold,
                               openvdb::tree::ValueAccessor<const openvdb::FloatTree>& acc)

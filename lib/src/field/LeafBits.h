@@ -16,18 +16,29 @@ namespace field {
 using FloatLeaf = openvdb::FloatTree::LeafNodeType;
 using Words = std::array<uint64_t, 8>; ///< a leaf's voxels as bits: word x, bit y * 8 + z
 
-/// The leaf's active voxels.
-Words activeWords(const FloatLeaf& leaf);
+/// A leaf's active voxels and the shell of voxels around it, read from its 26 neighbours (their
+/// faces, edges and corners; an active tile counts as active voxels): bit z + 1 of
+/// rows[x + 1][y + 1], for x, y and z in [-1, 8].
+struct ActiveShell
+{
+    uint16_t rows[10][10] = {};
+};
+ActiveShell activeShell(const FloatLeaf& home,
+                        openvdb::tree::ValueAccessor<const openvdb::FloatTree>& acc);
 
-/// w shifted so that each voxel's bit holds its neighbour's at offset (dx, dy, dz), each -1, 0
-/// or 1 (0 where that neighbour lies outside the leaf).
-Words shiftedWords(const Words& w, int dx, int dy, int dz);
-
-/// Per axis, the voxels of a leaf (active bits `active`) whose edge to the next voxel along that
-/// axis has all 18 corners of its 4 cells active within the leaf: a sign change there needs
-/// nothing added, and is passed over without probing them (a surface crosses millions of such
-/// edges).
-std::array<Words, 3> fullStencils(const Words& active);
+/// What the frontier scan can pass over, per axis, from a leaf's active shell:
+/// - full: the voxels whose edge to the next voxel along the axis has all 18 corners of its 4
+///   cells active: a sign change there needs nothing added (a surface crosses millions of such
+///   edges);
+/// - fullBelow: the same for the edge from the voxel before;
+/// - activeBelow: the voxels whose one before is active.
+/// Neighbour leaves count: within the leaf alone, 97% of the 13.1M drop's 1.35M crossing edges
+/// left for probing, 18 probes each, touched its faces and were full all the same.
+struct EdgeStencils
+{
+    std::array<Words, 3> full, fullBelow, activeBelow;
+};
+EdgeStencils edgeStencils(const ActiveShell& shell);
 
 /// Per direction (2 axis + (step > 0)), the active voxels of `home` whose frontier scan can find
 /// anything in that direction: an inactive neighbour there and |phi| < threshold, or an active

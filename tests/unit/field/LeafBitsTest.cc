@@ -1,6 +1,7 @@
 // A leaf's voxels as bits (field/LeafBits.h) against voxel-by-voxel brute force on random leaves:
-// the full 18-corner stencils per axis, and the frontier candidates per direction, with
-// neighbours in the 6 adjacent leaves, a missing neighbour leaf, and an active tile.
+// the active shell and the full 18-corner stencils per axis, with the 26 neighbour leaves there,
+// missing or tiles, and the frontier candidates per direction, with neighbours in the 6 adjacent
+// leaves, a missing neighbour leaf, and an active tile.
 #include "field/LeafBits.h"
 
 #include <gtest/gtest.h>
@@ -17,39 +18,75 @@ bool bitOf(const Words& w, const openvdb::Coord& l)
     return w[l.x()] >> (l.y() * 8 + l.z()) & 1;
 }
 
-bool inLeaf(const openvdb::Coord& l)
-{
-    return l.x() >= 0 && l.x() < 8 && l.y() >= 0 && l.y() < 8 && l.z() >= 0 && l.z() < 8;
-}
-
 } // namespace
 
-TEST(LeafBits, FullStencilsAreTheEdgesWithAll18CornersActive)
+TEST(LeafBits, EdgeStencilsCountTheNeighbourLeaves)
 {
+    // A 3x3x3 block of leaves, 97% of the voxels active (so that many stencils are full, many
+    // one corner short), then each of the 26 neighbour leaves kept, left out, or made an active
+    // or an inactive tile; the shell and the stencils against isValueOn voxel by voxel.
     std::mt19937 rng(7);
-    for (int trial = 0; trial < 40; ++trial) {
-        auto bits = [&] { return uint64_t(rng()) << 32 | rng(); };
-        Words active;
-        for (uint64_t& w : active) // 1 voxel in 16 off: many stencils full, many one corner short
-            w = ~(bits() & bits() & bits() & bits());
-        const std::array<Words, 3> full = fullStencils(active);
+    const openvdb::Coord centre(-16, 8, 24);
+    std::bernoulli_distribution on(0.97);
+    std::uniform_int_distribution<int> fate(0, 7);
+    for (int trial = 0; trial < 12; ++trial) {
+        openvdb::FloatTree tree(2.f);
+        for (int x = -8; x < 16; ++x)
+            for (int y = -8; y < 16; ++y)
+                for (int z = -8; z < 16; ++z)
+                    if (on(rng)) tree.setValueOn(centre + openvdb::Coord(x, y, z), 0.5f);
+        for (int dx = -1; dx <= 1; ++dx)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dz = -1; dz <= 1; ++dz) {
+                    if (!dx && !dy && !dz) continue;
+                    const openvdb::Coord o = centre + openvdb::Coord(8 * dx, 8 * dy, 8 * dz);
+                    const int f = trial == 0 ? 0 : fate(rng); // the first trial keeps them all
+                    if (f >= 4) continue;                     // kept
+                    delete tree.stealNode<FloatLeaf>(o, 2.f, false);
+                    if (f == 2) tree.addTile(1, o, -0.25f, true);
+                    if (f == 3) tree.addTile(1, o, 2.f, false);
+                }
+        const FloatLeaf* home = tree.probeConstLeaf(centre);
+        ASSERT_NE(home, nullptr);
+        openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(tree);
+        const ActiveShell shell = activeShell(*home, acc);
+        auto active = [&](const openvdb::Coord& l) { return tree.isValueOn(centre + l); };
+        for (int x = -1; x <= 8; ++x)
+            for (int y = -1; y <= 8; ++y)
+                for (int z = -1; z <= 8; ++z)
+                    ASSERT_EQ(bool(shell.rows[x + 1][y + 1] >> (z + 1) & 1),
+                              active(openvdb::Coord(x, y, z)))
+                        << openvdb::Coord(x, y, z) << " trial " << trial;
+        const EdgeStencils e = edgeStencils(shell);
+        auto full = [&](const openvdb::Coord& c, int axis) {
+            const int b = (axis + 1) % 3, d = (axis + 2) % 3;
+            bool all = true;
+            for (int i = 0; i <= 1; ++i)
+                for (int j = -1; j <= 1; ++j)
+                    for (int k = -1; k <= 1; ++k) {
+                        openvdb::Coord m = c;
+                        m[axis] += i, m[b] += j, m[d] += k;
+                        all = all && active(m);
+                    }
+            return all;
+        };
+        size_t fullEdges = 0;
         for (int axis = 0; axis < 3; ++axis)
             for (int x = 0; x < 8; ++x)
                 for (int y = 0; y < 8; ++y)
                     for (int z = 0; z < 8; ++z) {
                         const openvdb::Coord c(x, y, z);
-                        bool all = true;
-                        const int b = (axis + 1) % 3, d = (axis + 2) % 3;
-                        for (int i = 0; i <= 1; ++i)
-                            for (int j = -1; j <= 1; ++j)
-                                for (int k = -1; k <= 1; ++k) {
-                                    openvdb::Coord m = c;
-                                    m[axis] += i, m[b] += j, m[d] += k;
-                                    all = all && inLeaf(m) && bitOf(active, m);
-                                }
-                        ASSERT_EQ(bitOf(full[axis], c), all)
+                        openvdb::Coord below = c;
+                        below[axis] -= 1;
+                        fullEdges += full(c, axis);
+                        ASSERT_EQ(bitOf(e.full[axis], c), full(c, axis))
+                            << "axis " << axis << " at " << c << " trial " << trial;
+                        ASSERT_EQ(bitOf(e.fullBelow[axis], c), full(below, axis))
+                            << "axis " << axis << " at " << c << " trial " << trial;
+                        ASSERT_EQ(bitOf(e.activeBelow[axis], c), active(below))
                             << "axis " << axis << " at " << c << " trial " << trial;
                     }
+        EXPECT_GT(fullEdges, 100u); // the test tests something
     }
 }
 
