@@ -73,12 +73,11 @@ ActiveShell activeShell(const FloatLeaf& home,
                             s.rows[x + 1][y + 1] |= uint16_t((w >> (8 * y + lz) & 1) << sz);
                     }
                 } else { // an edge (8 voxels) or a corner (1)
-                    for (int i = 0; i < 8; ++i) {
+                    for (int i = 0; i < (faces ? 8 : 1); ++i) {
                         const int x = dx ? lx : i, y = dy ? ly : i, z = dz ? lz : i;
                         if (n && !n->isValueOn(openvdb::Coord(x, y, z))) continue;
                         s.rows[dx ? sx : x + 1][dy ? sy : y + 1] |=
                             uint16_t(1 << (dz ? sz : z + 1));
-                        if (!faces) break;
                     }
                 }
             }
