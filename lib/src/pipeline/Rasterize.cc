@@ -291,7 +291,7 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
     params.validate();
     ps.validate();
     openvdb::initialize();
-    // the first non-finite position, on all threads (one thread took 10 ms of the 13.1M drop)
+    // the first non-finite position, on all threads (one thread takes 14 ms for the 13.1M drop)
     const size_t bad = util::withThreads(ctx, [&] {
         return tbb::parallel_reduce(
             tbb::blocked_range<size_t>(0, ps.size(), 65536), ps.size(),
