@@ -15,7 +15,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <numeric>
@@ -133,25 +132,40 @@ Components findComponents(const TriangleMesh& mesh)
 
 void markClosed(Components& c, const TriangleMesh& mesh, const std::vector<uint32_t>& ofPoint)
 {
+    // Each side (a, b) is counted at its lower end, among the triangles around that end (the
+    // sides a triangle has there: those of its sides whose lower end it is), on all threads:
+    // the same counts as sorting every triangle's three sides, as this did (a sort of 2.3M
+    // sides and a pass over them on one thread: 62-68 ms of the 13.1M drop's decimation on 2
+    // cores), for a vertex -> triangle table of half the bytes.
     c.closed.assign(c.volume.size(), 1);
-    std::vector<uint64_t> sides(3 * mesh.triangles.size()); // undirected, once per triangle
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.triangles.size()),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t t = r.begin(); t != r.end(); ++t)
-                              for (int k = 0; k < 3; ++k) {
-                                  const uint64_t a = mesh.triangles[t][k],
-                                                 b = mesh.triangles[t][(k + 1) % 3];
-                                  sides[3 * t + k] = std::min(a, b) << 32 | std::max(a, b);
-                              }
-                      });
-    tbb::parallel_sort(sides.begin(), sides.end());
-    for (size_t i = 0; i < sides.size();) {
-        size_t j = i;
-        while (j < sides.size() && sides[j] == sides[i])
-            ++j;
-        if (j - i != 2) c.closed[ofPoint[uint32_t(sides[i])]] = 0;
-        i = j;
-    }
+    const VertexTriangles around(mesh.triangles, mesh.points.size());
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, mesh.points.size()),
+        [&](const tbb::blocked_range<size_t>& r) {
+            std::vector<uint32_t> upper; // the other ends of the sides whose lower end is v
+            for (size_t v = r.begin(); v != r.end(); ++v) {
+                upper.clear();
+                for (uint32_t i = around.start[v]; i < around.start[v + 1]; ++i) {
+                    // a triangle with v at two corners is listed twice: its sides once
+                    if (i > around.start[v] && around.tris[i] == around.tris[i - 1]) continue;
+                    const auto& t = mesh.triangles[around.tris[i]];
+                    for (int k = 0; k < 3; ++k) {
+                        const uint32_t a = t[k], b = t[(k + 1) % 3];
+                        if (std::min(a, b) == v) upper.push_back(std::max(a, b));
+                    }
+                }
+                std::sort(upper.begin(), upper.end());
+                for (size_t i = 0; i < upper.size();) {
+                    size_t j = i;
+                    while (j < upper.size() && upper[j] == upper[i])
+                        ++j;
+                    if (j - i != 2) // (both ends are of one component: the upper one's, as before)
+                        __atomic_store_n(&c.closed[ofPoint[upper[i]]], uint8_t(0),
+                                         __ATOMIC_RELAXED);
+                    i = j;
+                }
+            }
+        });
 }
 
 void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Components& before,

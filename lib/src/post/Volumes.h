@@ -29,7 +29,7 @@ Components findComponents(const TriangleMesh& mesh);
 
 /// c.closed from mesh, whose points' components are `ofPoint` (another mesh than the one c
 /// was found on, as long as the steps between keep borders: decimation does, and the check
-/// costs a sort of the sides, cheaper on the decimated mesh).
+/// counts every side, cheaper on the decimated mesh).
 void markClosed(Components& c, const TriangleMesh& mesh, const std::vector<uint32_t>& ofPoint);
 
 /// For a mesh made from one whose components are `before` (`ofPoint`: each point's component,

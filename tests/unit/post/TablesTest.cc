@@ -1,7 +1,7 @@
 // TablesTest.cc - the vertex -> triangle table (post/Normals.h) and the components
 // (post/Volumes.h), both made on all threads with atomics, against plain one-thread references
-// written out here: the same lists in triangle order and the same component numbers, for any
-// thread count, on meshes big enough that the threads really meet.
+// written out here: the same lists in triangle order, the same component numbers and the same
+// closed ones, for any thread count, on meshes big enough that the threads really meet.
 #include "post/Normals.h"
 #include "post/Volumes.h"
 
@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 #include <numeric>
 #include <random>
 #include <vector>
@@ -119,6 +120,46 @@ TEST(Components, NumberedByTheirLowestPointOnAnyThreadCount)
         const post::Components c = post::findComponents(m);
         EXPECT_EQ(c.volume.size(), count) << threads << " threads";
         EXPECT_TRUE(c.ofPoint == want) << threads << " threads";
+    }
+}
+
+TEST(Components, ClosedWhereEverySideHasTwoTriangles)
+{
+    // closed tetrahedra, with pieces opened (a triangle taken out), made non-manifold (a
+    // triangle twice: its sides three times) and given a triangle with a corner twice (its
+    // side from that corner to itself once)
+    TriangleMesh m = scrambledTetrahedra(40000, 7);
+    std::vector<Tri> kept;
+    for (size_t t = 0; t < m.triangles.size(); ++t) {
+        if (t % 53 == 0) continue;
+        kept.push_back(m.triangles[t]);
+        if (t % 71 == 0) kept.push_back(m.triangles[t]);
+    }
+    m.triangles = kept;
+    // and a piece of two triangles with a corner twice, whose every side has two (closed, as
+    // the sides are counted: each triangle's sides once, however often a corner repeats)
+    const auto p = uint32_t(m.points.size());
+    m.points.insert(m.points.end(), {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0, 1, 0)});
+    m.triangles.push_back({p, p, p + 1});
+    m.triangles.push_back({p + 2, p, p});
+    // reference: every side of every triangle counted in a map, one thread
+    std::map<std::pair<uint32_t, uint32_t>, int> count;
+    for (const Tri& t : m.triangles)
+        for (int k = 0; k < 3; ++k)
+            ++count[std::minmax(t[k], t[(k + 1) % 3])];
+    const post::Components found = post::findComponents(m);
+    std::vector<uint8_t> want(found.volume.size(), 1);
+    for (const auto& [side, n] : count)
+        if (n != 2) want[found.ofPoint[side.first]] = 0;
+    const size_t open = size_t(std::count(want.begin(), want.end(), uint8_t(0)));
+    ASSERT_GT(open, want.size() / 20); // each kind of flaw is there, many times
+    ASSERT_LT(open, want.size() / 2);
+    ASSERT_TRUE(want[found.ofPoint[p]]);
+    for (int threads : {1, 2, 8}) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        post::Components c = found;
+        post::markClosed(c, m, c.ofPoint);
+        EXPECT_TRUE(c.closed == want) << threads << " threads";
     }
 }
 
