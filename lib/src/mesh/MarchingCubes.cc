@@ -18,7 +18,6 @@
 #include <atomic>
 #include <functional>
 #include <numeric>
-#include <unordered_map>
 
 namespace fluidsurf {
 namespace mesh {
@@ -39,8 +38,9 @@ using LeafRange = Leaves::LeafRange;
 /// frame).
 struct EdgeWords
 {
-    uint64_t axis[3][8] = {};
-    uint32_t before[8] = {};
+    // (no initialisers: markEdges writes every word of every leaf's, on all threads)
+    uint64_t axis[3][8];
+    uint32_t before[8];
 
     /// The number, from the leaf's first vertex, of the vertex on the edge from local offset i
     /// to +axis (which must cross).
@@ -98,6 +98,69 @@ struct CellWriter
     }
 };
 
+/// Each leaf's position in the leaf manager by its origin: an open-addressing table at most half
+/// full, filled on all threads (a compare-and-swap claims a slot; the origins are distinct, so
+/// an insert never needs to compare them). It stands for OpenVDB's probeConstLeaf and a map from
+/// the leaf to its position, which a leaf's passes asked about 57 times between them: a tree
+/// walk and a hash look-up each, and the map filled on one thread (a tenth of the stage on 16
+/// threads, where the passes themselves scale).
+class LeafTable
+{
+public:
+    explicit LeafTable(const Leaves& leaves)
+    {
+        size_t size = 16;
+        while (size < 2 * leaves.leafCount())
+            size <<= 1;
+        mMask = size - 1;
+        mSlots.resize(size);
+        util::fillInParallel(mSlots, Slot{0, 0, 0, kEmpty});
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.leafCount(), 1024),
+                          [&](const tbb::blocked_range<size_t>& r) {
+                              for (size_t i = r.begin(); i != r.end(); ++i) {
+                                  const Coord o = leaves.leaf(i).origin();
+                                  for (size_t h = slotOf(o);; h = (h + 1) & mMask) {
+                                      uint32_t empty = kEmpty;
+                                      if (__atomic_compare_exchange_n(
+                                              &mSlots[h].position, &empty, uint32_t(i), false,
+                                              __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {
+                                          mSlots[h].x = o.x(), mSlots[h].y = o.y(),
+                                          mSlots[h].z = o.z();
+                                          break;
+                                      }
+                                  }
+                              }
+                          });
+    }
+    /// The position of the leaf at origin o, or -1 where there is none.
+    long find(const Coord& o) const
+    {
+        for (size_t h = slotOf(o);; h = (h + 1) & mMask) {
+            const Slot& s = mSlots[h];
+            if (s.position == kEmpty) return -1;
+            if (s.x == o.x() && s.y == o.y() && s.z == o.z()) return long(s.position);
+        }
+    }
+
+private:
+    static constexpr uint32_t kEmpty = UINT32_MAX;
+    struct Slot
+    {
+        int32_t x, y, z;
+        uint32_t position;
+    };
+    size_t slotOf(const Coord& o) const
+    {
+        const uint64_t k = (uint64_t(uint32_t(o.x()) >> 3) * 0x9E3779B97F4A7C15ull) ^
+                           (uint64_t(uint32_t(o.y()) >> 3) * 0xC2B2AE3D27D4EB4Full) ^
+                           (uint64_t(uint32_t(o.z()) >> 3) * 0x165667B19E3779F9ull);
+        return size_t(k ^ k >> 29) & mMask;
+    }
+
+    util::NoInitVector<Slot> mSlots;
+    size_t mMask = 0;
+};
+
 struct Passes
 {
     const FloatTree& tree;
@@ -109,17 +172,13 @@ struct Passes
     /// first after the edge vertices)
     std::vector<uint64_t> triangleStart, centreStart;
 
-    std::vector<LeafBits> bits;   // per leaf (pass 0)
-    std::vector<EdgeWords> edges; // per leaf (pass 1)
-    std::unordered_map<const FloatLeaf*, size_t> position;
+    std::vector<LeafBits> bits;          // per leaf (pass 0)
+    util::NoInitVector<EdgeWords> edges; // per leaf (pass 1)
+    LeafTable table{leaves};
     const LeafBits none{};
 
     /// The position of the leaf at origin o, or -1 where there is none.
-    long leafAt(const Coord& o) const
-    {
-        const FloatLeaf* n = tree.probeConstLeaf(o);
-        return n ? long(position.at(n)) : -1;
-    }
+    long leafAt(const Coord& o) const { return table.find(o); }
 
     /// The bits of the leaf one leaf away along +axis (or -axis: step -1); nothing active where
     /// there is no leaf.
@@ -130,17 +189,18 @@ struct Passes
         const long n = leafAt(o);
         return n >= 0 ? bits[size_t(n)] : none;
     }
-    LeafStar star(const FloatLeaf& leaf) const
+    /// leaf, at position pos, and its six face neighbours.
+    LeafStar star(const FloatLeaf& leaf, size_t pos) const
     {
         LeafStar s;
-        s.values[0] = leaf.buffer().data(), s.bits[0] = &bits[position.at(&leaf)];
+        s.values[0] = leaf.buffer().data(), s.bits[0] = &bits[pos];
         for (int a = 0; a < 3; ++a)
             for (int d = 0; d < 2; ++d) {
                 Coord o = leaf.origin();
                 o[a] += d ? int(FloatLeaf::DIM) : -int(FloatLeaf::DIM);
-                if (const FloatLeaf* l = tree.probeConstLeaf(o))
-                    s.values[1 + 2 * a + d] = l->buffer().data();
-                s.bits[1 + 2 * a + d] = &next(leaf, a, d ? 1 : -1);
+                const long n = leafAt(o);
+                if (n >= 0) s.values[1 + 2 * a + d] = leaves.leaf(size_t(n)).buffer().data();
+                s.bits[1 + 2 * a + d] = n >= 0 ? &bits[size_t(n)] : &none;
             }
         return s;
     }
@@ -148,15 +208,14 @@ struct Passes
     {
         Coord o = leaf.origin();
         o[axis] += int(FloatLeaf::DIM);
-        return tree.probeConstLeaf(o);
+        const long n = leafAt(o);
+        return n >= 0 ? &leaves.leaf(size_t(n)) : nullptr;
     }
 
     // Pass 0: active and inside bits of every leaf.
     void readBits()
     {
         bits.resize(leaves.leafCount());
-        for (size_t i = 0; i < leaves.leafCount(); ++i)
-            position[&leaves.leaf(i)] = i;
         tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
             ctx.checkpoint();
             for (auto leaf = range.begin(); leaf; ++leaf)
@@ -168,7 +227,7 @@ struct Passes
     void markEdges()
     {
         std::vector<uint64_t> counts(leaves.leafCount(), 0);
-        edges.assign(leaves.leafCount(), EdgeWords());
+        edges.resize(leaves.leafCount()); // (each leaf's written below)
         tbb::parallel_for(leaves.leafRange(), [&](const LeafRange& range) {
             ctx.checkpoint();
             for (auto leaf = range.begin(); leaf; ++leaf) {
@@ -207,7 +266,7 @@ struct Passes
             FloatAccessor acc(tree);
             for (auto leaf = range.begin(); leaf; ++leaf) {
                 const FloatLeaf& values = *leaf;
-                const LeafStar star = this->star(*leaf);
+                const LeafStar star = this->star(*leaf, leaf.pos());
                 const EdgeWords& e = this->edges[leaf.pos()];
                 const float* buffer = values.buffer().data();
                 uint64_t next = first[leaf.pos()];
@@ -262,7 +321,7 @@ struct Passes
                    Sink& out) const
     {
         size_t cells = 0;
-        const VertexStar idx = Sink::kWrites ? vertexStar(leaf) : VertexStar();
+        const VertexStar idx = Sink::kWrites ? vertexStar(leaf, pos) : VertexStar();
         const LeafBits &here = bits[pos], &nx = next(leaf, 0), &ny = next(leaf, 1),
                        &nz = next(leaf, 2);
         const float* buffer = leaf.buffer().data();
@@ -386,14 +445,14 @@ struct Passes
                                     axis);
         }
     };
-    VertexStar vertexStar(const FloatLeaf& leaf) const
+    VertexStar vertexStar(const FloatLeaf& leaf, size_t pos) const
     {
         VertexStar s;
         s.origin = leaf.origin();
         for (int k = 0; k < 8; ++k) {
             const long n =
                 k ? leafAt(s.origin.offsetBy((k & 1) * 8, (k >> 1 & 1) * 8, (k >> 2 & 1) * 8))
-                  : long(position.at(&leaf));
+                  : long(pos);
             if (n >= 0) s.edges[k] = &edges[size_t(n)], s.first[k] = first[size_t(n)];
         }
         return s;
@@ -477,7 +536,8 @@ void checkVertexCount(uint64_t vertices)
 // of marching cubes on two cores (14 ms of the 13.1M drop's 0.34 s), and more of it on sixteen.
 void dropUnusedVertices(TriangleMesh& mesh, Context& ctx)
 {
-    std::vector<uint32_t> map(mesh.points.size(), 0);
+    util::NoInitVector<uint32_t> map(mesh.points.size()); // (zeroed on all threads)
+    util::fillInParallel(map, 0u);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, mesh.triangles.size(), 4096),
                       [&](const tbb::blocked_range<size_t>& r) {
                           for (size_t i = r.begin(); i != r.end(); ++i)
@@ -518,7 +578,7 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
     openvdb::FloatTree::Ptr voxelized;
     const FloatTree* tree = &leafOnlyTree(grid, voxelized);
     Leaves leaves(*tree);
-    Passes passes{*tree, Affine(grid.transform()), leaves, ctx, {}, {}, {}, {}, {}, {}};
+    Passes passes{*tree, Affine(grid.transform()), leaves, ctx, {}, {}, {}, {}, {}};
     TriangleMesh mesh;
     passes.readBits();
     passes.markEdges();
@@ -533,7 +593,7 @@ TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t*
     passes.triangulate(mesh);
     // (`= {}` would keep their capacity: it is the initializer-list assignment)
     std::vector<LeafBits>().swap(passes.bits);
-    std::vector<EdgeWords>().swap(passes.edges);
+    util::NoInitVector<EdgeWords>().swap(passes.edges);
     dropUnusedVertices(mesh, ctx);
     if (surfaceCells) *surfaceCells = cells;
     return mesh;
