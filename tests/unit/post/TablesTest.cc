@@ -66,7 +66,7 @@ TEST(VertexTriangles, TheSameListsInTriangleOrderOnAnyThreadCount)
     for (const auto& [first, last] :
          {std::pair<uint32_t, uint32_t>{0, nv}, {nv / 3, 2 * nv / 3}, {0, 1}, {nv - 5, nv}}) {
         const auto want = referenceTable(m.triangles, first, last);
-        for (int threads : {1, 2, 8}) {
+        for (int threads : {1, 2, 8, 16}) {
             tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
             const post::VertexTriangles got(m.triangles, first, last);
             ASSERT_EQ(got.start.size(), size_t(last - first) + 1);
