@@ -25,3 +25,18 @@ signal_after() {
     wait $pid
     rc=$?
 }
+# signal_when_written SIGNAL FILE ERRFILE CMD...: CMD in the background (stderr to ERRFILE), sent
+# SIGNAL as soon as FILE exists (polled every 10 ms; after 60 s, sent anyway): mid-run however
+# fast the machine, where a fixed delay could come after the end. Its exit code in rc.
+signal_when_written() {
+    local sig=$1 file=$2 err=$3; shift 3
+    "$@" 2>"$err" &
+    local pid=$! waited=0
+    while [ ! -e "$file" ] && [ $waited -lt 6000 ]; do
+        sleep 0.01
+        waited=$((waited + 1))
+    done
+    kill -"$sig" $pid
+    wait $pid
+    rc=$?
+}

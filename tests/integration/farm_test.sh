@@ -121,8 +121,10 @@ expect_error "--shard on a single file" "needs a frame pattern" \
 check "--shard: nothing written by the refused runs" bash -c "! ls x_* x.ply 2>/dev/null | grep -q ."
 
 # --- Ctrl-C in the middle of a sequence with frames in flight: 130, nothing half-written -----
+# (sent once the first mesh is written, with three frames to go: after a fixed 1.5 s it could
+# come after the end, the whole run taking 1.6-1.8 s on 2 cores)
 for f in 1 2 3 4; do "$BIN" generate drop --count 400000 -r 0.01 --seed $f -o "big_000$f.xyz" >/dev/null; done
-signal_after INT 1.5 b.err "$BIN" reconstruct 'big_{:04}.xyz' -r 0.01 -o 'b_{:04}.ply' -q
+signal_when_written INT b_0001.ply b.err "$BIN" reconstruct 'big_{:04}.xyz' -r 0.01 -o 'b_{:04}.ply' -q
 check "sequence: Ctrl-C exits with 130 (got $rc)" test $rc -eq 130
 check "sequence: Ctrl-C says so in one line" bash -c "[ \$(wc -l <b.err) -eq 1 ] && grep -q interrupted b.err"
 check "sequence: Ctrl-C leaves no temporary file, and every mesh it left whole" bash -c \
