@@ -108,6 +108,7 @@ State makeState(TriangleMesh& mesh)
     // a time: whole, it was the peak of the run (45 MB on the 1.7M-particle frame).
     // not zeroed: filled below in parallel, where its pages are first touched
     s.quadrics.reset(new PackedQuadric[nv]);
+    s.valence.resize(nv); // (filled with the quadrics, from the same tables)
     for (size_t part = 0; part < kTableParts; ++part) {
         const auto first = uint32_t(nv * part / kTableParts),
                    last = uint32_t(nv * (part + 1) / kTableParts);
@@ -115,6 +116,7 @@ State makeState(TriangleMesh& mesh)
         tbb::parallel_for(
             tbb::blocked_range<uint32_t>(first, last), [&](const tbb::blocked_range<uint32_t>& r) {
                 for (uint32_t v = r.begin(); v != r.end(); ++v) {
+                    s.valence[v] = around.start[v - first + 1] - around.start[v - first];
                     Quadric q{};
                     for (uint32_t i = around.start[v - first]; i < around.start[v - first + 1];
                          ++i) {
@@ -376,6 +378,7 @@ void forgetTouched(State& s, std::vector<uint8_t>& touched)
 TriangleMesh compact(State&& s, std::vector<uint32_t>* kept)
 {
     s.quadrics.reset();
+    util::NoInitVector<uint32_t>().swap(s.valence);
     util::NoInitVector<float>().swap(s.drift);
     util::NoInitVector<uint8_t>().swap(s.refused);
     util::returnFreedMemory();
@@ -421,9 +424,8 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
 {
     DecimateStats st;
     State s = makeState(mesh);
-    size_t idle = 0;                      // passes in a row without a collapse
-    double rankFactor = 3;                // collapses under the threshold per collapse made
-    util::NoInitVector<uint32_t> valence; // each point's triangles
+    size_t idle = 0;       // passes in a row without a collapse
+    double rankFactor = 3; // collapses under the threshold per collapse made
     std::vector<uint8_t> touched(s.points.size(), 0);      // see BlockResult::touched
     tbb::enumerable_thread_specific<LocalNumbers> localOf; // see Block
     for (size_t pass = 0; pass < kMaxPasses; ++pass) {
@@ -442,14 +444,6 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
         const std::vector<size_t>& blockStart = blocks.start;
         const size_t nb = blockStart.size() - 1;
         util::returnFreedMemory();
-        valence.resize(s.points.size());
-        util::fillInParallel(valence, 0u);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, n),
-                          [&](const tbb::blocked_range<size_t>& r) {
-                              for (size_t t = r.begin(); t != r.end(); ++t)
-                                  for (uint32_t v : s.triangles[t]) // counts: the same in any order
-                                      __atomic_fetch_add(&valence[v], 1u, __ATOMIC_RELAXED);
-                          });
 
         // The last few collapses (under 1/kLastShare of the triangles) go to the blocks by
         // their edges not remembered as refused, cheapest first in each, with no threshold:
@@ -473,11 +467,17 @@ TriangleMesh decimate(TriangleMesh mesh, const DecimateTarget& target, DecimateS
                         results[b].alive = blockStart[b + 1] - blockStart[b]; // as they are
                         continue;
                     }
-                    Block block(s, &tris[blockStart[b]], blockStart[b + 1] - blockStart[b], valence,
+                    Block block(s, &tris[blockStart[b]], blockStart[b + 1] - blockStart[b],
                                 localOf.local());
                     results[b] = block.run(shares.threshold, target, budget[b]);
                 }
             });
+        // (valences lost by the vertices a block does not own: several blocks may take from
+        // one, in any order, to the same count)
+        tbb::parallel_for(size_t(0), nb, [&](size_t b) {
+            for (const auto& [v, lost] : results[b].lost)
+                __atomic_fetch_sub(&s.valence[v], lost, __ATOMIC_RELAXED);
+        });
         size_t collapses = 0;
         for (size_t b = 0; b < nb; ++b) {
             const BlockResult& r = results[b];
