@@ -5,9 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <set>
+#include <utility>
+#include <vector>
 
 using namespace fluidsurf;
 using namespace fluidsurf::neighbors;
@@ -76,6 +79,58 @@ TEST(CellIndex, EveryParticleIsInItsCellAndFound)
                                            index.cellCoord(sub.positions[i].z, 2));
             ASSERT_FALSE(r.empty());
         }
+}
+
+TEST(CellIndex, SortsByCellThenInputOrderAsDirectComputation)
+{
+    // Particles on cell borders (multiples of half a cell, exact in float and double), on the
+    // grid's far side, in random order, a count that is not a multiple of four (the keys are
+    // found four at a time where the CPU has AVX2); with 32-bit keys and, with one particle
+    // 5,000 cells away, 64-bit ones. The order must be the stable sort by each particle's
+    // cell, found here with std::floor.
+    uint64_t s = 99;
+    auto u = [&] {
+        s = s * 6364136223846793005ull + 1442695040888963407ull;
+        return uint32_t(s >> 33);
+    };
+    for (const bool far : {false, true}) {
+        std::vector<Vec3f> pts;
+        for (int i = 0; i < 4003; ++i) {
+            Vec3f p(float(u() % 64) * 0.125f, float(u() % 16) * 0.125f - 3,
+                    float(u() % 40) * 0.125f);
+            if (i % 3 == 0) p.x += float(u() % 1000) * 1e-4f; // between the borders too
+            pts.push_back(p);
+        }
+        if (far) pts[1234] = Vec3f(1250.f, -3.f, 0.f);
+        const double cell = 0.25;
+        Context ctx;
+        const CellIndex index = buildCellIndex(pts.data(), nullptr, pts.size(), cell, ctx);
+        std::vector<std::pair<uint64_t, uint32_t>> expected;
+        for (uint32_t i = 0; i < pts.size(); ++i) {
+            int64_t c[3];
+            for (int a = 0; a < 3; ++a) {
+                c[a] = int64_t(std::floor((double(pts[i][a]) - index.origin[a]) / cell));
+                ASSERT_GE(c[a], 0);
+                ASSERT_LT(c[a], int64_t(index.dims[a]));
+            }
+            expected.push_back({mortonKey(uint32_t(c[0]), uint32_t(c[1]), uint32_t(c[2])), i});
+        }
+        EXPECT_EQ(index.dims[0] > 1024, far);
+        std::sort(expected.begin(), expected.end()); // by key, then by input order
+        ASSERT_EQ(index.order.size(), pts.size());
+        size_t cells = 0;
+        for (size_t k = 0; k < expected.size(); ++k) {
+            ASSERT_EQ(index.order[k], expected[k].second) << k;
+            ASSERT_EQ(index.positions[k], pts[expected[k].second]) << k;
+            if (k == 0 || expected[k].first != expected[k - 1].first) {
+                ASSERT_LT(cells, index.keys.size());
+                EXPECT_EQ(index.keys[cells], expected[k].first);
+                EXPECT_EQ(index.starts[cells], k);
+                ++cells;
+            }
+        }
+        EXPECT_EQ(cells, index.cellCount());
+    }
 }
 
 TEST(CellIndex, RejectsSpansBeyondTheKey)
