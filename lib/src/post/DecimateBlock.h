@@ -311,6 +311,9 @@ public:
         mPoint.resize(nv);
         for (size_t v = 0; v < nv; ++v)
             mPoint[v] = s.points[mGlobal[v]];
+        mDrift.resize(nv);
+        for (size_t v = 0; v < nv; ++v)
+            mDrift[v] = s.drift[mGlobal[v]];
     }
 
     BlockResult run(double threshold, const DecimateTarget& target, size_t budget)
@@ -352,7 +355,7 @@ public:
             if (o == Outcome::Collapsed) {
                 ++out.collapses;
                 out.maxError = std::max(out.maxError, error);
-                out.maxDrift = std::max(out.maxDrift, double(mS.drift[mGlobal[a]]));
+                out.maxDrift = std::max(out.maxDrift, double(mDrift[a]));
                 for (uint32_t w : mRing) // after collapse(): touch() walks with mMark too
                     touch(w, a, out.touched);
             } else {
@@ -633,8 +636,7 @@ private:
         double drift = 0; // see State::drift
         // (a plane of the old fan is as far off the input as its corners may be)
         auto far = [&](const Tri& t) {
-            return double(std::max(
-                {mS.drift[mGlobal[t[0]]], mS.drift[mGlobal[t[1]]], mS.drift[mGlobal[t[2]]]}));
+            return double(std::max({mDrift[t[0]], mDrift[t[1]], mDrift[t[2]]}));
         };
         auto driftTo = [&](const Vec3d& x, const Vec3d& n0, const Tri& t) {
             const double l0 = n0.length();
@@ -666,7 +668,7 @@ private:
             mergedQuadric(mQuadric[a], point(a), mQuadric[b], point(b), col.point));
         mQuadric[a] = mS.quadrics[mGlobal[a]].unpack(); // as the state keeps it
         mPoint[a] = mS.points[mGlobal[a]] = col.point;
-        mS.drift[mGlobal[a]] = float(drift);
+        mDrift[a] = mS.drift[mGlobal[a]] = float(drift);
         mTriAlive[shared[0]] = mTriAlive[shared[1]] = 0;
         for (uint32_t c : opposite) { // the dead out of c's list, the order kept
             uint32_t* list = &mRefs[mStart[c]];
@@ -727,6 +729,9 @@ private:
     /// State::points per local vertex, the same way (read through the mesh's numbers, they
     /// were an extra load and a cache miss at every corner the guards look at).
     std::vector<Vec3d> mPoint;
+    /// State::drift per local vertex, the same way (read at every corner of a collapse's fans:
+    /// through the mesh's numbers, each was a load from an array as long as the mesh).
+    std::vector<float> mDrift;
     RankHeap<Entry> mHeap;
     /// About how many of the heap's entries are stale: the edges of the ends of the collapses
     /// since the heap was last rid of them (run).
