@@ -228,7 +228,15 @@ __attribute__((always_inline)) inline void laneSums(const Neighbourhood& nb, con
                                                     float h2, LaneSums& out)
 {
     constexpr int kWidth = kClassLanes / N; // floats in a V
-    V count[N]{}, cf[N]{}, gx[N]{}, gy[N]{}, gz[N]{};
+    typedef int32_t Ints __attribute__((vector_size(sizeof(V))));
+    // The counts in integers: a lane within h is one mask for both the count and t, counted by
+    // subtracting the mask (-1). t = h2 - d2 is > 0 exactly where d2 < h2: the difference of
+    // two floats is 0 only for equal ones (near each other it is exact, a multiple of their
+    // spacing: a subnormal only for h below 1e-15, so not even a flush to zero changes it).
+    // The same whole numbers as adding 1.f (the device's way): exact either way, far below 2^24.
+    // Two vector operations fewer of the loop's 24.
+    Ints count[N]{};
+    V cf[N]{}, gx[N]{}, gy[N]{}, gz[N]{};
     for (size_t i = 0; i < nLive; ++i)
         for (int k = 0; k < N; ++k) {
             const size_t j = size_t(live[i]) * kClassLanes;
@@ -240,13 +248,18 @@ __attribute__((always_inline)) inline void laneSums(const Neighbourhood& nb, con
             const V dx = x - px, dy = y - py, dz = z - pz;
             const V d2 = dx * dx + dy * dy + dz * dz;
             V t = h2 - d2;
-            t = t > 0.f ? t : 0.f;
-            count[k] += d2 < h2 ? V{} + 1.f : V{};
+            const Ints near = t > 0.f;
+            t = near ? t : V{};
+            count[k] -= near;
             const V vt2 = v * t * t;
             cf[k] += vt2 * t;
             gx[k] += vt2 * dx, gy[k] += vt2 * dy, gz[k] += vt2 * dz;
         }
-    std::memcpy(out.count, count, sizeof count), std::memcpy(out.cf, cf, sizeof cf);
+    for (int k = 0; k < N; ++k) {
+        const V c = __builtin_convertvector(count[k], V);
+        std::memcpy(&out.count[k * kWidth], &c, sizeof c);
+    }
+    std::memcpy(out.cf, cf, sizeof cf);
     std::memcpy(out.gx, gx, sizeof gx), std::memcpy(out.gy, gy, sizeof gy);
     std::memcpy(out.gz, gz, sizeof gz);
 }
