@@ -122,25 +122,34 @@ private:
     static constexpr size_t kCopyLanes = 8;
 
     /// p[0, 8)'s coordinates less o's, into x, y and z: the scalar loop's subtractions, in AVX
-    /// registers. The 24 floats of 8 points are 3 loads; each axis is picked from them by two
-    /// shuffles. (One point at a time, the copy was a fifth of classification's samples on the
-    /// 13.1M drop, a cell's 216 candidates for its 8 particles; a tenth now, mostly the loads.)
+    /// registers. The 24 floats of 8 points are six 4-float loads, points 0-3 in the registers'
+    /// low halves and 4-7 in their high halves, so that five shuffles within the halves sort
+    /// them into the three axes (the same moves on both halves). (One point at a time, the copy
+    /// was a fifth of classification's samples on the 13.1M drop, a cell's 216 candidates for
+    /// its 8 particles. From three 8-float loads it took eight shuffles across the halves and
+    /// five mask loads: a sixth of the samples still.)
     __attribute__((always_inline)) static void copyRelative8(const Vec3f* p, const Vec3f& o,
                                                              float* x, float* y, float* z)
     {
         static_assert(sizeof(Vec3f) == 3 * sizeof(float));
+        typedef float Four __attribute__((vector_size(16)));
         typedef int32_t Ints __attribute__((vector_size(32)));
-        util::WideLanes a, b, c; // x0 y0 z0 x1 y1 z1 x2 y2 | z2 x3 y3 z3 x4 y4 z4 x5 | y5 ...
-        std::memcpy(&a, &p[0], sizeof a);
-        std::memcpy(&b, reinterpret_cast<const float*>(p) + 8, sizeof b);
-        std::memcpy(&c, reinterpret_cast<const float*>(p) + 16, sizeof c);
-        // each axis' first 6 from a and b (b's lane k as 8 + k), then its last 2 from c
-        const util::WideLanes xab = __builtin_shuffle(a, b, Ints{0, 3, 6, 9, 12, 15, 0, 0});
-        const util::WideLanes yab = __builtin_shuffle(a, b, Ints{1, 4, 7, 10, 13, 0, 0, 0});
-        const util::WideLanes zab = __builtin_shuffle(a, b, Ints{2, 5, 8, 11, 14, 0, 0, 0});
-        const util::WideLanes rx = __builtin_shuffle(xab, c, Ints{0, 1, 2, 3, 4, 5, 10, 13}) - o.x;
-        const util::WideLanes ry = __builtin_shuffle(yab, c, Ints{0, 1, 2, 3, 4, 8, 11, 14}) - o.y;
-        const util::WideLanes rz = __builtin_shuffle(zab, c, Ints{0, 1, 2, 3, 4, 9, 12, 15}) - o.z;
+        using V = util::WideLanes;
+        const float* f = reinterpret_cast<const float*>(p);
+        Four q[6];
+        for (int k = 0; k < 6; ++k)
+            std::memcpy(&q[k], f + 4 * k, sizeof q[k]);
+        auto halves = [](Four lo, Four hi) -> V {
+            return __builtin_shufflevector(lo, hi, 0, 1, 2, 3, 4, 5, 6, 7);
+        };
+        const V m14 = halves(q[0], q[3]); // x0 y0 z0 x1 | x4 y4 z4 x5
+        const V m25 = halves(q[1], q[4]); // y1 z1 x2 y2 | y5 z5 x6 y6
+        const V m36 = halves(q[2], q[5]); // z2 x3 y3 z3 | z6 x7 y7 z7
+        const V xy = __builtin_shuffle(m25, m36, Ints{2, 3, 9, 10, 6, 7, 13, 14}); // x2 y2 x3 y3
+        const V yz = __builtin_shuffle(m14, m25, Ints{1, 2, 8, 9, 5, 6, 12, 13});  // y0 z0 y1 z1
+        const V rx = __builtin_shuffle(m14, xy, Ints{0, 3, 8, 10, 4, 7, 12, 14}) - o.x;
+        const V ry = __builtin_shuffle(yz, xy, Ints{0, 2, 9, 11, 4, 6, 13, 15}) - o.y;
+        const V rz = __builtin_shuffle(yz, m36, Ints{1, 3, 8, 11, 5, 7, 12, 15}) - o.z;
         std::memcpy(x, &rx, sizeof rx);
         std::memcpy(y, &ry, sizeof ry);
         std::memcpy(z, &rz, sizeof rz);
