@@ -19,9 +19,9 @@ namespace post {
 /// (PackedQuadric::pack). A triangle without area adds nothing. `around`: the table of the
 /// vertices from `first` (VertexTriangles(triangles, first, last), first <= begin <= end <=
 /// last).
-/// lanes: 1 (one vertex at a time), or 4 (four at a time, one a lane of AVX registers) where
-/// util::doubleRegisterLanes() is 4 (the default then; tests run both); the same bits either
-/// way. ValueError otherwise.
+/// lanes: 1 (one vertex at a time), 4 (four at a time, one a lane of AVX registers; only where
+/// util::doubleRegisterLanes() is 4), or 0 (the default: 4 where it can, else 1); the same bits
+/// either way (tests run both). ValueError otherwise.
 void planeQuadrics(const Vec3d* points, const std::vector<std::array<uint32_t, 3>>& triangles,
                    const VertexTriangles& around, uint32_t first, uint32_t begin, uint32_t end,
                    PackedQuadric* out, int lanes = 0);
