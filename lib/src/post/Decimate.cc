@@ -62,7 +62,7 @@ constexpr double kBlockEdges = 32; ///< a block's side in mean edge lengths (~2,
 constexpr size_t kMaxPasses = 64;
 constexpr size_t kLastShare = 5;  ///< see "last" in decimate()
 constexpr size_t kSample = 4;     ///< a pass' threshold from every kSample-th triangle's edges
-constexpr size_t kTableParts = 4; ///< makeState's vertex -> triangle table, in this many parts
+constexpr size_t kTableParts = 2; ///< makeState's vertex -> triangle table, in this many parts
 constexpr uint8_t kGone = 0x80;   ///< State::refused of a triangle a pass collapsed away
 
 /// mesh's triangles move into the state (a copy of 23 MB on the 1.7M-particle frames).
@@ -106,7 +106,10 @@ State makeState(TriangleMesh& mesh)
     util::fillInParallel(s.drift, 0.f);
     // each vertex gathers the planes of its triangles, weighted by area, in triangle order: the
     // same sums every run. The vertex -> triangle table is made for a part of the vertices at
-    // a time: whole, it was the peak of the run (45 MB on the 1.7M-particle frame).
+    // a time: whole, it was the peak of the run (45 MB on the 1.7M-particle frame). Each part
+    // reads every triangle twice: in halves rather than quarters, 8 ms less on 2 cores for
+    // the 13.1M drop, for a peak a few MB higher on the 1.7M-particle frame (161 -> 164-181
+    // MB writing PLY, 3 runs; the peak moves by as much from run to run).
     // not zeroed: filled below in parallel, where its pages are first touched
     s.quadrics.reset(new PackedQuadric[nv]);
     s.valence.resize(nv); // (filled with the quadrics, from the same tables)
