@@ -1,5 +1,7 @@
-// Memory.cc - faulting pages in on all threads (see Memory.h).
+// Memory.cc - huge pages for large arrays, faulting pages in on all threads (see Memory.h).
 #include "util/Memory.h"
+
+#include <tbb/task_arena.h>
 
 #include <atomic>
 #include <cerrno>
@@ -13,8 +15,19 @@
 namespace fluidsurf {
 namespace util {
 
+void adviseHugePages(uintptr_t begin, size_t bytes)
+{
+    constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+    if (bytes < 2 * kHuge || tbb::this_task_arena::max_concurrency() < kHugePageThreads) return;
+    const uintptr_t first = (begin + kHuge - 1) & ~(kHuge - 1),
+                    last = (begin + bytes) & ~(kHuge - 1);
+    // (a kernel without THP says EINVAL: the pages are then as they would have been)
+    if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+}
+
 void populateInParallel(uintptr_t begin, size_t bytes)
 {
+    adviseHugePages(begin, bytes);
     // a kernel without it says EINVAL once, and is not asked again
     static std::atomic<bool> unsupported{false};
     if (unsupported.load(std::memory_order_relaxed)) return;

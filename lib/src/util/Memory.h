@@ -35,6 +35,20 @@ inline void returnFreedMemory()
 #endif
 }
 
+/// Threads from which adviseHugePages asks for huge pages (see there).
+constexpr int kHugePageThreads = 8;
+
+/// Asks the kernel to back the whole 2 MiB pieces of [begin, begin + bytes) with transparent
+/// huge pages (MADV_HUGEPAGE; honoured where THP is in its `madvise` or `always` mode), for an
+/// array of 4 MiB or more that is written whole, and only while the current task arena has
+/// kHugePageThreads threads or more; otherwise nothing. Why: a fresh 4 KiB page costs a fault,
+/// and 16 threads faulting at once contend in the kernel; with 2 MiB pages the 13.1M-particle
+/// drop took 277k -> 70k faults on an H100 host's 16 threads, 1.74 -> 1.67 s whole (medians of
+/// 5), and the 1.7M-particle frame 0.89 -> 0.79 s. Why not on fewer threads: on the 2-core VM
+/// the kernel zeroed huge pages at several times the cost per byte (a VM's fresh memory), and
+/// the drop took 4.9 -> 5.2 s. Pages only: it reads and writes no object. (BENCHMARKS.md.)
+void adviseHugePages(uintptr_t begin, size_t bytes);
+
 /// An allocator whose vectors leave new elements of a trivial type uninitialised (resize(n),
 /// vector(n)): an array of hundreds of MB is then first touched by the parallel loop that fills
 /// it, instead of zeroed by one thread first (0.07 s for the 13.1M particles' sort handles).
@@ -46,6 +60,14 @@ template <typename T> struct NoInitAllocator : std::allocator<T>
     };
     NoInitAllocator() = default;
     template <typename U> NoInitAllocator(const NoInitAllocator<U>&) noexcept {}
+    /// std::allocator's, the storage of a large array advised to huge pages (adviseHugePages):
+    /// these arrays are the ones written whole by parallel loops.
+    T* allocate(size_t n)
+    {
+        T* p = std::allocator<T>::allocate(n);
+        adviseHugePages(reinterpret_cast<uintptr_t>(p), n * sizeof(T));
+        return p;
+    }
     /// Nothing at all for a plain type of bytes (Vec3f too, whose default constructor would
     /// zero it): the code that asked for the elements writes each before it reads it.
     template <typename U> void construct(U* p) noexcept
@@ -75,7 +97,8 @@ template <typename Vector, typename T> void fillInParallel(Vector& v, const T& v
 
 /// Faults in the pages of [begin, begin + bytes) on all threads, a 2 MiB piece each (Linux's
 /// MADV_POPULATE_WRITE, since 5.14; where the kernel lacks it, nothing, and the pages fault in
-/// where they are first written). Pages only: it reads and writes no object.
+/// where they are first written), advised to huge pages first (adviseHugePages). Pages only:
+/// it reads and writes no object.
 void populateInParallel(uintptr_t begin, size_t bytes);
 
 /// v.resize(n) (new elements value-initialised, as resize does), the pages of its new storage

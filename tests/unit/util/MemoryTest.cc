@@ -1,14 +1,19 @@
 // MemoryTest.cc - util::resizeInParallel does what resize does (the old elements kept, the new
 // ones value-initialised), where it faults the new storage in on all threads first (a vector
-// that grows past 4 MiB) and where it leaves the growing to resize (small, or within capacity).
+// that grows past 4 MiB) and where it leaves the growing to resize (small, or within capacity);
+// large arrays ask for huge pages on many threads only.
 #include "util/Memory.h"
 
 #include <fluidsurf/Vec3.h>
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <array>
 #include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <string>
 #include <vector>
 
 using namespace fluidsurf;
@@ -31,4 +36,57 @@ TEST(Memory, ResizeInParallelKeepsTheOldElementsAndZeroesTheNew)
     EXPECT_EQ(t[2], (std::array<uint32_t, 3>{7, 8, 9}));
     EXPECT_EQ(t[3], (std::array<uint32_t, 3>{0, 0, 0}));
     EXPECT_EQ(t.back(), (std::array<uint32_t, 3>{0, 0, 0}));
+}
+
+namespace {
+
+/// The VmFlags of the mapping that holds address a, from /proc/self/smaps ("" if none).
+std::string vmFlagsAt(uintptr_t a)
+{
+    std::ifstream smaps("/proc/self/smaps");
+    std::string line;
+    bool inside = false;
+    while (std::getline(smaps, line)) {
+        unsigned long long lo = 0, hi = 0;
+        if (std::sscanf(line.c_str(), "%llx-%llx ", &lo, &hi) == 2 && line.find(':') > 20)
+            inside = a >= lo && a < hi;
+        else if (inside && line.rfind("VmFlags:", 0) == 0)
+            return line.substr(8) + " ";
+    }
+    return "";
+}
+
+bool transparentHugePagesOn()
+{
+    std::ifstream f("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string mode;
+    return std::getline(f, mode) && mode.find("[never]") == std::string::npos;
+}
+
+} // namespace
+
+// The large arrays written whole ask for huge pages (the `hg` flag of their mapping) in a task
+// arena of util::kHugePageThreads threads or more, and not in a smaller one; small arrays never.
+TEST(Memory, LargeArraysAskForHugePagesOnManyThreadsOnly)
+{
+    if (!transparentHugePagesOn()) GTEST_SKIP() << "no transparent huge pages on this kernel";
+    constexpr size_t kFloats = size_t(16) << 20; // 64 MiB: a mapping of its own (glibc's default)
+    auto advised = [](const void* p) {
+        // a whole 2 MiB piece inside the array
+        const uintptr_t at =
+            (reinterpret_cast<uintptr_t>(p) + (size_t(4) << 20)) & ~uintptr_t(0xfff);
+        return vmFlagsAt(at).find(" hg ") != std::string::npos;
+    };
+    for (const int threads : {2, util::kHugePageThreads - 1, util::kHugePageThreads, 16}) {
+        tbb::task_arena arena(threads);
+        arena.execute([&] {
+            util::NoInitVector<float> big(kFloats);
+            EXPECT_EQ(advised(big.data()), threads >= util::kHugePageThreads) << threads;
+            std::vector<Vec3f> grown;
+            util::resizeInParallel(grown, kFloats / 3);
+            EXPECT_EQ(advised(grown.data()), threads >= util::kHugePageThreads) << threads;
+            util::NoInitVector<float> small(size_t(1) << 20); // 4 MiB, not two whole pieces
+            EXPECT_FALSE(advised(small.data())) << threads;
+        });
+    }
 }
