@@ -326,6 +326,25 @@ struct Kernel
         if (mask.isOff()) return 0;
         gather(leaf.origin(), activeBox(leaf), s);
         size_t evaluations = 0;
+        // The sums of several rows first, then their values, kBatch voxels at a time: the
+        // values' divisions, roots and eigen-solves of different voxels then overlap (four to
+        // a register with AVX2), and a row's 3.4 active voxels on average no longer leave a
+        // register's lanes empty.
+        constexpr int kBatch = 64;
+        FieldSums sum[kBatch];
+        int at[kBatch], m = 0;
+        auto flush = [&] {
+            float value[kBatch];
+            if (lanes == util::kWideLanes) // (fieldLanes(): the CPU has AVX2)
+                fieldValuesWide(sum, m, constants, value);
+            else
+                for (int q = 0; q < m; ++q)
+                    value[q] = fieldValue(sum[q], constants);
+            for (int q = 0; q < m; ++q)
+                leaf.setValueOnly(at[q], value[q]);
+            evaluations += size_t(m);
+            m = 0;
+        };
         for (int i = 0; i < int(LeafT::DIM); ++i)
             for (int j = 0; j < int(LeafT::DIM); ++j) {
                 const int rowOffset = (i << 6) | (j << 3); // OpenVDB leaf layout: z fastest
@@ -335,10 +354,7 @@ struct Kernel
                 const float vx = float(i * dx), vy = float(j * dx);
                 const int kmax = 31 - __builtin_clz(bits);
                 selectRow(i, j, __builtin_ctz(bits), kmax + window, s);
-                // the row's sums first, then its values: the values' divisions, roots and
-                // eigen-solves of different voxels then overlap (four to a register with AVX2)
-                FieldSums sum[LeafT::DIM];
-                int at[LeafT::DIM], m = 0;
+                if (m + int(LeafT::DIM) > kBatch) flush();
                 for (int k = 0; k < int(LeafT::DIM); ++k) {
                     if (!mask.isOn(rowOffset + k)) continue;
                     const uint32_t b = s.rowSlabStart[k], e = s.rowSlabStart[k + window];
@@ -351,16 +367,8 @@ struct Kernel
                         sum[m++] = radii ? sums<false, true>(s, b, e, vx, vy, vz)
                                          : sums<false, false>(s, b, e, vx, vy, vz);
                 }
-                float value[LeafT::DIM];
-                if (lanes == util::kWideLanes) // (fieldLanes(): the CPU has AVX2)
-                    fieldValuesWide(sum, m, constants, value);
-                else
-                    for (int q = 0; q < m; ++q)
-                        value[q] = fieldValue(sum[q], constants);
-                for (int q = 0; q < m; ++q)
-                    leaf.setValueOnly(at[q], value[q]);
-                evaluations += size_t(m);
             }
+        flush();
         return evaluations;
     }
 };
