@@ -205,6 +205,8 @@ struct CellCases
 {
     CellPolygons polygons[256];
     bool fourCrossings[256] = {};
+    /// The triangles of the polygons fanned (a polygon of n edges: n - 2).
+    int triangles[256] = {};
     constexpr CellCases() : polygons{}
     {
         for (int pattern = 0; pattern < 256; ++pattern) {
@@ -215,21 +217,46 @@ struct CellCases
                         (pattern >> kFace[f][k] & 1) != (pattern >> kFace[f][(k + 1) & 3] & 1);
                 fourCrossings[pattern] = fourCrossings[pattern] || crossings == 4;
             }
-            if (!fourCrossings[pattern]) polygons[pattern] = CellPolygons(pattern);
+            if (fourCrossings[pattern]) continue;
+            polygons[pattern] = CellPolygons(pattern);
+            bool done[12] = {};
+            for (int start = 0; start < 12; ++start) {
+                if (polygons[pattern].next[start] < 0 || done[start]) continue;
+                int n = 0;
+                for (int e = start; !done[e]; e = polygons[pattern].next[e])
+                    done[e] = true, ++n;
+                triangles[pattern] += n - 2;
+            }
         }
     }
 };
+inline constexpr CellCases kCellCases{};
+
+/// Bit n: corner n inside.
+constexpr int signPattern(const float c[8])
+{
+    int pattern = 0;
+    for (int n = 0; n < 8; ++n)
+        pattern |= int(inside(c[n])) << n;
+    return pattern;
+}
 } // namespace detail
+
+/// The triangles of a cell whose faces have at most two crossings each (its polygons fanned),
+/// from its corners' signs; -1 for a cell with four crossings on a face (cut it: CellPolygons).
+/// Host only: the mesher's counting pass needs no more.
+inline int cellTriangles(const float c[8])
+{
+    const int pattern = detail::signPattern(c);
+    return detail::kCellCases.fourCrossings[pattern] ? -1 : detail::kCellCases.triangles[pattern];
+}
 
 FLUIDSURF_HD inline CellPolygons::CellPolygons(const float c[8])
 {
 #ifndef __CUDA_ARCH__
-    static constexpr detail::CellCases kCases{};
-    int pattern = 0;
-    for (int n = 0; n < 8; ++n)
-        pattern |= int(inside(c[n])) << n;
-    if (!kCases.fourCrossings[pattern]) {
-        *this = kCases.polygons[pattern];
+    const int pattern = detail::signPattern(c);
+    if (!detail::kCellCases.fourCrossings[pattern]) {
+        *this = detail::kCellCases.polygons[pattern];
         return;
     }
 #endif

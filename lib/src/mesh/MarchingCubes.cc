@@ -79,6 +79,7 @@ struct CellCount
     static constexpr bool kWrites = false;
     size_t triangles = 0, centres = 0;
     void triangle(uint32_t, uint32_t, uint32_t) { ++triangles; }
+    void add(size_t fanned) { triangles += fanned; }
     uint32_t centre(const Vec3f&, const Vec3f&) { return uint32_t(centres++); }
 };
 struct CellWriter
@@ -403,6 +404,9 @@ struct Passes
     void cell(const Coord& origin, const float c[8], const VertexStar& idx,
               const TriangleMesh& mesh, Sink& out) const
     {
+        if constexpr (!Sink::kWrites) { // counting: the signs alone, as a rule
+            if (const int n = cellTriangles(c); n >= 0) return out.add(size_t(n));
+        }
         const CellPolygons polygons(c);
         const int* next = polygons.next;
         const bool ambiguous = polygons.ambiguous;

@@ -1,6 +1,7 @@
 // CellPolygonsTest.cc - a cell's polygons looked up by its corners' signs (the host's table) are
-// those cut from its values, for every sign pattern and random values; and, independently of
-// both, every crossing edge lies on one polygon, each step along a face of both its edges.
+// those cut from its values, for every sign pattern and random values, and so are the counting
+// pass' triangles; and, independently of both, every crossing edge lies on one polygon, each
+// step along a face of both its edges.
 #include "mesh/CellPolygons.h"
 
 #include <gtest/gtest.h>
@@ -36,6 +37,10 @@ TEST(CellPolygons, LookedUpAsCutForEverySignPattern)
             cut.cut(c);
             fourCrossingCells += cut.ambiguous;
             ASSERT_EQ(looked.ambiguous, cut.ambiguous) << pattern;
+            // the counting pass' triangles: the cut polygons fanned, n - 2 each
+            int fanned = 0;
+            cut.forEach([&](const int*, int n) { fanned += n - 2; });
+            ASSERT_EQ(cellTriangles(c), cut.ambiguous ? -1 : fanned) << pattern;
             int before[12] = {}; // each crossing edge follows one other: closed polygons
             for (int e = 0; e < 12; ++e)
                 if (looked.next[e] >= 0) ++before[looked.next[e]];
