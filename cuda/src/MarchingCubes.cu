@@ -396,9 +396,7 @@ __device__ void cellsOf(const DeviceLeaves& L, int leaf, CellSink& out)
         for (int n = 0; n < 8 && complete; ++n)
             complete = readVoxel(L, leaf, x + (n & 1), y + (n >> 1 & 1), z + (n >> 2 & 1), c[n]);
         if (!complete) continue;
-        int config = 0;
-        for (int n = 0; n < 8; ++n)
-            config |= int(mesh::inside(c[n])) << n;
+        const int config = mesh::cellSignPattern(c);
         if (config == 0 || config == 255) continue;
         cell(x, y, z, c, out);
     }

@@ -210,9 +210,7 @@ struct CellMesher
                 complete = !std::isnan(c[k]);
             }
             if (!complete) continue;
-            int config = 0;
-            for (int k = 0; k < 8; ++k)
-                config |= int(mesh::inside(c[k])) << k;
+            const int config = mesh::cellSignPattern(c);
             if (config == 0 || config == 255) continue;
             const mesh::CellPolygons polygons(c);
             uint32_t vertex[12]; // numbers in out.vertices

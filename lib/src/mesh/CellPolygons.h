@@ -115,6 +115,15 @@ FLUIDSURF_HD constexpr bool inside(float v)
     return v < 0;
 }
 
+/// A cell's sign pattern, bit n: corner n inside (0 and 255: no crossing).
+FLUIDSURF_HD constexpr int cellSignPattern(const float c[8])
+{
+    int pattern = 0;
+    for (int n = 0; n < 8; ++n)
+        pattern |= int(inside(c[n])) << n;
+    return pattern;
+}
+
 /// Where the zero crossing lies on an edge from value a to value b, as a fraction of the edge.
 FLUIDSURF_HD inline double crossing(float a, float b)
 {
@@ -183,12 +192,12 @@ struct CellPolygons
     }
 
     /// Calls polygon(edges, n) for each closed polygon, its crossing edges in order.
-    template <typename F> FLUIDSURF_HD void forEach(F&& polygon) const
+    template <typename F> FLUIDSURF_HD constexpr void forEach(F&& polygon) const
     {
         bool done[12] = {};
         for (int start = 0; start < 12; ++start) {
             if (next[start] < 0 || done[start]) continue;
-            int edges[12], n = 0;
+            int edges[12] = {}, n = 0;
             for (int e = start; !done[e]; e = next[e])
                 done[e] = true, edges[n++] = e;
             polygon(edges, n);
@@ -220,27 +229,12 @@ struct CellCases
             }
             if (fourCrossings[pattern]) continue;
             polygons[pattern] = CellPolygons(pattern);
-            bool done[12] = {};
-            for (int start = 0; start < 12; ++start) {
-                if (polygons[pattern].next[start] < 0 || done[start]) continue;
-                int n = 0;
-                for (int e = start; !done[e]; e = polygons[pattern].next[e])
-                    done[e] = true, ++n;
-                triangles[pattern] += n - 2;
-            }
+            int& fanned = triangles[pattern];
+            polygons[pattern].forEach([&fanned](const int*, int n) { fanned += n - 2; });
         }
     }
 };
 inline constexpr CellCases kCellCases{};
-
-/// Bit n: corner n inside.
-constexpr int signPattern(const float c[8])
-{
-    int pattern = 0;
-    for (int n = 0; n < 8; ++n)
-        pattern |= int(inside(c[n])) << n;
-    return pattern;
-}
 } // namespace detail
 
 /// The triangles of a cell whose faces have at most two crossings each (its polygons fanned),
@@ -248,14 +242,14 @@ constexpr int signPattern(const float c[8])
 /// Host only: the mesher's counting pass needs no more.
 inline int cellTriangles(const float c[8])
 {
-    const int pattern = detail::signPattern(c);
+    const int pattern = cellSignPattern(c);
     return detail::kCellCases.fourCrossings[pattern] ? -1 : detail::kCellCases.triangles[pattern];
 }
 
 FLUIDSURF_HD inline CellPolygons::CellPolygons(const float c[8])
 {
 #ifndef __CUDA_ARCH__
-    const int pattern = detail::signPattern(c);
+    const int pattern = cellSignPattern(c);
     if (!detail::kCellCases.fourCrossings[pattern]) {
         *this = detail::kCellCases.polygons[pattern];
         return;

@@ -317,9 +317,7 @@ struct Passes
                 complete = probe(leaf, acc, l.x(), l.y(), l.z(), kCorner[n][0], kCorner[n][1],
                                  kCorner[n][2], c[n]);
             if (!complete) continue;
-            int config = 0;
-            for (int n = 0; n < 8; ++n)
-                config |= int(inside(c[n])) << n;
+            const int config = cellSignPattern(c);
             if (config == 0 || config == 255) continue;
             ++cells;
             cell(leaf.origin() + l, c, idx, mesh, out);
