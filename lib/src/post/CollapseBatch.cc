@@ -17,6 +17,35 @@ namespace post {
 namespace detail {
 namespace {
 
+/// Fields [0, n) of lanes [first, first + the lanes of V) from their rows (CollapseBatch::Lanes),
+/// field k of every lane into out[k]: each pair of a row is loaded as set() stored it, and two
+/// lanes' pairs interleave into a pair of fields, (a0 a1), (b0 b1) -> (a0 b0), (a1 b1) (with four
+/// lanes, lanes 2 and 3 in the upper halves).
+template <typename V, size_t kRow>
+FLUIDSURF_QUADRIC_INLINE void fieldsOf(const double (*rows)[kRow], int first, int n, V* out)
+{
+    typedef double Pair __attribute__((vector_size(16)));
+    auto pair = [&](int lane, int k) {
+        Pair p;
+        std::memcpy(&p, &rows[first + lane][k], sizeof p);
+        return p;
+    };
+    for (int k = 0; k < n; k += 2) {
+        V a, b, lo, hi;
+        if constexpr (sizeof(V) == sizeof(Pair)) {
+            a = pair(0, k), b = pair(1, k);
+            lo = __builtin_shufflevector(a, b, 0, 2), hi = __builtin_shufflevector(a, b, 1, 3);
+        } else {
+            a = __builtin_shufflevector(pair(0, k), pair(2, k), 0, 1, 2, 3);
+            b = __builtin_shufflevector(pair(1, k), pair(3, k), 0, 1, 2, 3);
+            lo = __builtin_shufflevector(a, b, 0, 4, 2, 6);
+            hi = __builtin_shufflevector(a, b, 1, 5, 3, 7);
+        }
+        out[k] = lo;
+        if (k + 1 < n) out[k + 1] = hi;
+    }
+}
+
 /// Lanes [first, first + the lanes of V) of the batch: their errors into out, and their points
 /// into points (points[k][lane], if given).
 template <typename V>
@@ -26,14 +55,10 @@ FLUIDSURF_QUADRIC_INLINE void errorsOf(const CollapseBatch& b, int first, double
     constexpr int kFields = CollapseBatch::kFields;
     const CollapseBatch::Lanes& in = b.lanes();
     V qa[kFields], qb[kFields], pa[3], pb[3];
-    for (int k = 0; k < kFields; ++k) {
-        std::memcpy(&qa[k], &in.qa[k][first], sizeof(V));
-        std::memcpy(&qb[k], &in.qb[k][first], sizeof(V));
-    }
-    for (int k = 0; k < 3; ++k) {
-        std::memcpy(&pa[k], &in.pa[k][first], sizeof(V));
-        std::memcpy(&pb[k], &in.pb[k][first], sizeof(V));
-    }
+    fieldsOf(in.qa, first, kFields, qa);
+    fieldsOf(in.qb, first, kFields, qb);
+    fieldsOf(in.pa, first, 3, pa);
+    fieldsOf(in.pb, first, 3, pb);
     const BasicQuadric<V> a{qa[0], qa[1], qa[2], qa[3], qa[4], qa[5],
                             qa[6], qa[7], qa[8], qa[9], qa[10]};
     const BasicQuadric<V> c{qb[0], qb[1], qb[2], qb[3], qb[4], qb[5],

@@ -57,13 +57,11 @@ public:
     void set(int i, const Quadric& qa, const Vec3d& pa, const Quadric& qb, const Vec3d& pb)
     {
         static_assert(sizeof(Quadric) == kFields * sizeof(double), "a quadric: 11 doubles");
-        double a[kFields], b[kFields]; // (its fields in order: a00 ... w)
-        std::memcpy(a, &qa, sizeof a);
-        std::memcpy(b, &qb, sizeof b);
-        for (int k = 0; k < kFields; ++k)
-            mLanes.qa[k][i] = a[k], mLanes.qb[k][i] = b[k];
-        for (int k = 0; k < 3; ++k)
-            mLanes.pa[k][i] = pa[k], mLanes.pb[k][i] = pb[k];
+        static_assert(sizeof(Vec3d) == 3 * sizeof(double), "a point: 3 doubles");
+        storePairs(mLanes.qa[i], &qa, kFields);
+        storePairs(mLanes.qb[i], &qb, kFields);
+        storePairs(mLanes.pa[i], &pa, 3);
+        storePairs(mLanes.pb[i], &pb, 3);
     }
     /// The doubles a register holds where the CPU has AVX2 (4), else 2 (SSE).
     static int registerLanes();
@@ -74,14 +72,36 @@ public:
     void collapses(int n, Collapse* out, int lanes = registerLanes()) const;
 
     static constexpr int kFields = 11; ///< a quadric's doubles
-    /// The lanes as set, field by field: what errors() loads into vectors.
+    /// The lanes as set, a row each: a quadric's fields in order (a00 ... w), a point's x, y,
+    /// z, each padded with zeros to whole pairs. Written a pair at a time (16-byte stores) and
+    /// read so (errors() interleaves two lanes' pairs into one register a field): written field
+    /// by field into each field's row of lanes, as before, each register's load met four 8-byte
+    /// stores that could not be forwarded to it, and waited for them (the batch's copies were
+    /// 7% of a decimation's samples).
     struct Lanes
     {
-        double qa[kFields][kSize], qb[kFields][kSize], pa[3][kSize], pb[3][kSize];
+        double qa[kSize][kFields + 1], qb[kSize][kFields + 1], pa[kSize][4], pb[kSize][4];
     };
     const Lanes& lanes() const { return mLanes; }
 
 private:
+    /// The n doubles at `from` into `row`, a pair at a time, the last pair padded with +0.
+    static void storePairs(double* row, const void* from, int n)
+    {
+        typedef double Pair __attribute__((vector_size(16)));
+        const auto* d = static_cast<const char*>(from);
+        for (int k = 0; k + 1 < n; k += 2) {
+            Pair p;
+            std::memcpy(&p, d + k * sizeof(double), sizeof p);
+            std::memcpy(row + k, &p, sizeof p);
+        }
+        if (n % 2) {
+            Pair p{0.0, 0.0};
+            std::memcpy(&p, d + (n - 1) * sizeof(double), sizeof(double));
+            std::memcpy(row + n - 1, &p, sizeof p);
+        }
+    }
+
     // (zeroed once: lanes past n compute on whatever an earlier batch left, never undefined)
     alignas(32) Lanes mLanes{};
 };
