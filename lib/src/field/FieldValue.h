@@ -34,7 +34,9 @@ template <typename T> struct PartialSums
 };
 
 /// Add particle j at d = (ex, ey, ez) from the vertex, s2 = |d|^2 / R^2 (rj: its radius, used
-/// with Radii). Particles at s2 >= 1 add exactly zero. The one place the kernel is written.
+/// with Radii). Particles at s2 >= 1 add exactly zero. The kernel for the scalar, 4-lane and
+/// scatter paths; the 8-lane gather (GatherField.cc, wideSums) spells out the same steps with their
+/// fused multiply-adds (FieldLanesTest checks it against std::fma).
 template <bool Ssp07, bool Radii, typename T>
 inline void addParticle(PartialSums<T>& a, T ex, T ey, T ez, T s2, T rj)
 {

@@ -11,6 +11,7 @@
 // for the narrow band and for gather-full (both call this on their topology).
 #pragma once
 
+#include "field/FieldMath.h"
 #include "neighbors/CellIndex.h"
 
 #include <fluidsurf/Context.h>
@@ -20,6 +21,7 @@
 #include <openvdb/openvdb.h>
 
 #include <cstddef>
+#include <cstdint>
 
 namespace fluidsurf {
 namespace field {
@@ -36,6 +38,15 @@ int fieldLanes();
 size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
                      const Params& params, const Level& level, Context& ctx,
                      int lanes = fieldLanes());
+
+namespace detail {
+/// One voxel's sums as the 8-lane gather makes them (for tests): candidates [b, e) of X, Y, Z
+/// (and radii R, or null) in leaf-local coordinates, candidate j on lane (j - b) % 8, the voxel
+/// at (vx, vy, vz); the arrays readable up to b + 8 ceil((e - b) / 8), lanes past e padded with
+/// particles beyond R. ValueError where fieldLanes() is not 8.
+FieldSums wideVoxelSums(const float* X, const float* Y, const float* Z, const float* R, uint32_t b,
+                        uint32_t e, float vx, float vy, float vz, float invR2, bool ssp07);
+} // namespace detail
 
 } // namespace field
 } // namespace fluidsurf

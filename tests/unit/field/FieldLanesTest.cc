@@ -3,7 +3,9 @@
 // lanes (SSE2) and on 8 (AVX2, where the CPU has it) against the brute-force field
 // (BruteForce.h), so that both paths stay tested whichever this machine takes by default, and
 // the four-at-once values (FieldValueWide.h) bit for bit against fieldValue, and the 8 lanes'
-// sums added at once (toFieldSumsWide) bit for bit against their grouping written out.
+// sums added at once (toFieldSumsWide) bit for bit against their grouping written out; the 8
+// lanes' fused multiply-adds bit for bit against the same steps with std::fma, one lane at a
+// time.
 #include "field/FieldMath.h"
 #include "field/FieldValue.h"
 #include "field/FieldValueWide.h"
@@ -17,6 +19,7 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <vector>
 
 using namespace fluidsurf;
 using namespace fluidsurf::test;
@@ -317,4 +320,73 @@ TEST(FieldMath, EightLaneSumsAtOnceKeepTheGroupingBitForBit)
     EXPECT_EQ(differ, 0u) << "of " << compared << " sums";
     // the data can tell groupings apart: else the comparison above would prove nothing
     EXPECT_GT(orderMatters, compared / 10) << "of " << compared;
+}
+
+/// One voxel's 8-lane sums (GatherField.cc's wideSums) against its arithmetic written out in
+/// scalars, lane by lane: each fused step a std::fma (rounded once, like the FMA instruction),
+/// the lanes then added in laneSum's grouping. Bit for bit, for every sum, with and without
+/// radii, SSP07 and ZB05: it fails if a product is rounded before its sum where the gather
+/// fuses them, or fused where it does not (the values' bits are what a device must match).
+TEST(FieldLanes, EightLanesFuseAsWrittenOut)
+{
+    if (field::fieldLanes() != 8) GTEST_SKIP() << "no AVX2 and FMA on this CPU";
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<float> u(-1.1f, 1.1f), radius(0.5f, 1.5f), reach(0.8f, 1.2f);
+    constexpr float kFar = 1e30f; // (the gather's padding)
+    size_t compared = 0, inside = 0;
+    for (int round = 0; round < 3000; ++round) {
+        const uint32_t b = uint32_t(round % 5), n = 1 + uint32_t(round % 61);
+        const uint32_t padded = b + (n + 7) / 8 * 8;
+        std::vector<float> X(padded, kFar), Y(padded, kFar), Z(padded, kFar), R(padded, 0.f);
+        for (uint32_t j = b; j < b + n; ++j)
+            X[j] = u(rng), Y[j] = u(rng), Z[j] = u(rng), R[j] = radius(rng);
+        const float vx = 0.2f * u(rng), vy = 0.2f * u(rng), vz = 0.2f * u(rng);
+        const float span = reach(rng), invR2 = float(1.0 / (double(span) * span));
+        for (const bool ssp07 : {true, false})
+            for (const bool radii : {true, false}) {
+                const field::FieldSums got = field::detail::wideVoxelSums(
+                    X.data(), Y.data(), Z.data(), radii ? R.data() : nullptr, b, b + n, vx, vy, vz,
+                    invR2, ssp07);
+                float lane[14][8] = {};
+                for (uint32_t j = b; j < padded; ++j) {
+                    const int l = int((j - b) % 8);
+                    const float ex = X[j] - vx, ey = Y[j] - vy, ez = Z[j] - vz;
+                    float t = std::fma(-std::fma(ez, ez, std::fma(ex, ex, ey * ey)), invR2, 1.f);
+                    t = t > 1e-6f ? t : 0.f;
+                    inside += t > 0;
+                    const float t2 = t * t, wt = t2 * t;
+                    auto at = [&](int k) -> float& { return lane[k][l]; };
+                    at(0) += wt;
+                    at(1) = std::fma(wt, ex, at(1)), at(2) = std::fma(wt, ey, at(2));
+                    at(3) = std::fma(wt, ez, at(3));
+                    if (radii) at(4) = std::fma(wt, R[j], at(4));
+                    if (ssp07) {
+                        const float gx = t2 * ex, gy = t2 * ey, gz = t2 * ez;
+                        at(5) += gx, at(6) += gy, at(7) += gz;
+                        at(8) = std::fma(gx, ex, at(8)), at(9) = std::fma(gx, ey, at(9));
+                        at(10) = std::fma(gx, ez, at(10)), at(11) = std::fma(gy, ey, at(11));
+                        at(12) = std::fma(gy, ez, at(12)), at(13) = std::fma(gz, ez, at(13));
+                    }
+                }
+                auto total = [&](int k) {
+                    const float* v = lane[k];
+                    return double(((v[0] + v[1]) + (v[2] + v[3])) +
+                                  ((v[4] + v[5]) + (v[6] + v[7])));
+                };
+                const double expected[14] = {total(0),  total(1),  total(2),  total(3), total(4),
+                                             total(5),  total(6),  total(7),  total(8), total(9),
+                                             total(10), total(11), total(12), total(13)};
+                const double actual[14] = {got.w,    got.d[0], got.d[1], got.d[2], got.r,
+                                           got.g[0], got.g[1], got.g[2], got.m[0], got.m[1],
+                                           got.m[2], got.m[3], got.m[4], got.m[5]};
+                for (int k = 0; k < 14; ++k) {
+                    ASSERT_EQ(std::memcmp(&expected[k], &actual[k], sizeof(double)), 0)
+                        << "sum " << k << " (w, d, r, g, m), round " << round << ": expected "
+                        << expected[k] << ", got " << actual[k];
+                    ++compared;
+                }
+            }
+    }
+    EXPECT_GT(inside, size_t(20000)); // most candidates within R: the sums are not all zeros
+    ::testing::Test::RecordProperty("sums_compared", std::to_string(compared));
 }
