@@ -137,8 +137,9 @@ fnmaLanes(util::WideLanes a, util::WideLanes b, util::WideLanes c)
 /// addParticle's arithmetic with its fused multiply-adds written out: the fusions GCC 12 made of
 /// it in this target, where the compiler chose them (the outputs kept their bytes when they
 /// were written out). |d|^2 = ez ez + (ex ex + ey ey) and t = 1 - |d|^2 / R^2 one rounding each,
-/// every sum of a product one fused step; the products left alone are each used more than
-/// once. So the values' bits are the source's, and a device can do the same, op for op.
+/// every sum of a product one fused step; unfused are |d|^2's first square and the products
+/// used more than once (t t, t^2 t, t^2 d). So the values' bits are the source's, and a device
+/// can do the same, op for op.
 template <bool Ssp07, bool Radii>
 __attribute__((target("avx2,fma"))) FieldSums
 wideSums(const float* X, const float* Y, const float* Z, const float* Rr, uint32_t b, uint32_t e,
