@@ -1,12 +1,13 @@
 // FieldGather.h - the SSP07 / ZB05 gather on the GPU (host facade, no CUDA syntax): every active
-// voxel of the given leaf blocks gathers the particles within R and stores phi, the same formula
-// as the CPU (lib/src/field/FieldMath.h), summed in a different order (values agree to ~1e-6 r).
+// voxel of the given leaf blocks gathers the particles within R and stores phi, with the CPU's
+// sums to the bit (lib/src/field/GatherField.h: the same picks, order, lanes and fused
+// multiply-adds, where the CPU sums on 8 lanes) and the same formula (lib/src/field/FieldMath.h).
 //
 // Inputs are plain arrays the host builds from its cell index and band topology: particles in
 // cell order with the ranges and hash table of the occupied cells, and per leaf the voxel index
 // of its corner and 8 words of active bits (word x, bit y * 8 + z). One CUDA block per leaf: the
-// block collects the occupied cells near its leaf, streams their particles through shared
-// memory in tiles, and each thread sums for its voxels.
+// block gathers and sorts its leaf's particles as the CPU does (field/GatherLayout.h), and 8
+// threads, one a lane, sum each active voxel.
 #pragma once
 
 #include <fluidsurf/Vec3.h>
@@ -51,6 +52,12 @@ struct GatherTimes
     double uploadMs = 0, kernelMs = 0, downloadMs = 0; ///< CUDA events on the stream
     size_t deviceBytes = 0;                            ///< device memory allocated
 };
+
+/// Whether the device gather runs at this voxel size and support radius: it keeps a counter for
+/// each of a leaf's slab-and-column bins in shared memory, which grows with (R / voxel size)^3
+/// above 16 slabs an axis; past the device's limit (R of about 80 voxels on an H100) the CPU's
+/// field is used. False also without a usable device.
+bool gatherFits(double voxelSize, double influenceRadius);
 
 /// phi for the 512 voxels of every leaf (leafCount * 512 values, leaf after leaf, OpenVDB's voxel
 /// order); inactive voxels hold the background. Throws fluidsurf::Error on CUDA errors.

@@ -5,81 +5,99 @@
 
 #include "Stages.cuh"
 
+#include "field/GatherLayout.h"
+
+#include <string>
+
 namespace fluidsurf {
 namespace cuda {
 
 namespace {
 
-constexpr int kThreads = 256; // 2 voxels of the 8^3 leaf per thread
-constexpr int kVoxelsPerThread = 512 / kThreads;
-constexpr int kTile = 256;      // particles staged in shared memory at a time
+// The CPU's gather (lib/src/field/GatherField.cc), pick for pick: each leaf gathers the particles
+// of GatherLayout::box in cell order, sorts them stably by (z-slab, x-column, y-column), and each
+// active voxel adds, in that order, the particles of its window's slabs and its row's x-columns
+// whose (x, y) lie within R of its row's line (ex^2 + ey^2 < R^2 in float, unfused), the k-th of
+// them on lane k % 8, with the CPU's fused multiply-adds (wideSums); the lanes are added in pairs
+// and FieldMath's fieldValue finishes. So phi has the CPU's bits where the CPU sums on 8 lanes
+// (field::fieldLanes(): AVX2 and FMA), and the meshes made from it are the CPU's, post-processing
+// included. The file is built with --fmad=false: nothing else is fused.
+constexpr int kThreads = 256;   // a block a leaf; 8 threads a voxel, one for each lane
 constexpr int kCellChunk = 512; // occupied-cell lookups per pass
+constexpr int kGroups = kThreads / 8;
 static_assert(kCellChunk % kThreads == 0 && kThreads % 32 == 0, "whole warps, whole rounds");
+
+using field::GatherLayout;
 
 struct Params
 {
     DeviceCells cells;
     const int32_t* leafOrigins;
     const unsigned long long* leafActive;
-    double dx, R;
+    GatherLayout layout;
+    float R2, invR2; // the row test's R^2 and the sums' 1 / R^2, as the CPU rounds them
     field::FieldConstants constants;
     float* out;
     const uint32_t* compactOffsets; // non-null: out holds only the active voxels (see Stages.cuh)
+    const unsigned long long* candidateOffsets; // per leaf of the batch: where its particles go
+    float4* gathered;                           // the leaves' particles in cell order (x, y, z, r)
+    uint32_t* bucketOf;                         //   and each one's (slab, x-column, y-column)
+    float4* sorted;                             // the same sorted by bucket, stably
+    uint32_t* counts;                           // countKernel: particles per leaf
+    size_t leafBase;                            // the batch's first leaf
 };
 
-struct Sums
+/// A leaf's gather box in world units, from its active bits (GatherLayout::box); false when none
+/// is active.
+__device__ bool leafBox(const Params& p, size_t leaf, double o[3], double lo[3], double hi[3])
 {
-    float w = 0, d0 = 0, d1 = 0, d2 = 0, r = 0, g0 = 0, g1 = 0, g2 = 0, m0 = 0, m1 = 0, m2 = 0,
-          m3 = 0, m4 = 0, m5 = 0;
-};
+    const unsigned long long* words = p.leafActive + 8 * leaf;
+    int first[3] = {8, 8, 8}, last[3] = {-1, -1, -1};
+    unsigned long long yz = 0;
+    for (int x = 0; x < 8; ++x)
+        if (words[x]) {
+            first[0] = min(first[0], x), last[0] = x;
+            yz |= words[x];
+        }
+    if (last[0] < 0) return false;
+    unsigned z = 0;
+    for (int y = 0; y < 8; ++y)
+        if (const unsigned row = unsigned(yz >> (8 * y)) & 0xffu) {
+            first[1] = min(first[1], y), last[1] = y;
+            z |= row;
+        }
+    first[2] = __ffs(z) - 1, last[2] = 31 - __clz(z);
+    const GatherLayout& g = p.layout;
+    for (int a = 0; a < 3; ++a)
+        o[a] = p.leafOrigins[3 * leaf + a] * g.dx;
+    g.box(first, last, lo, hi);
+    return true;
+}
 
-__global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
+/// Walks the occupied cells of the leaf's box in the CPU's order (z, then y, then x), a chunk of
+/// cells at a time, and calls visit(cellBegin, cellPrefix, cells) with the chunk's occupied cells
+/// compacted in that order (all threads, block-uniform).
+template <typename Visit>
+__device__ void forEachCellChunk(const Params& p, const double o[3], const double lo[3],
+                                 const double hi[3], uint32_t* cellBegin, uint32_t* cellPrefix,
+                                 int* warpFound, int& cellsInChunk, Visit&& visit)
 {
-    __shared__ uint32_t cellBegin[kCellChunk], cellPrefix[kCellChunk + 1];
-    __shared__ float4 tile[kTile];
-    __shared__ int cellsInChunk;
-    __shared__ int warpFound[kThreads / 32];
-
-    const int leaf = blockIdx.x;
-    const int3 origin = make_int3(p.leafOrigins[3 * leaf], p.leafOrigins[3 * leaf + 1],
-                                  p.leafOrigins[3 * leaf + 2]);
-    const double o[3] = {origin.x * p.dx, origin.y * p.dx, origin.z * p.dx};
-    const float invR2 = float(1 / (p.R * p.R));
-
-    int voxel[kVoxelsPerThread];
-    bool active[kVoxelsPerThread];
-    float vx[kVoxelsPerThread], vy[kVoxelsPerThread], vz[kVoxelsPerThread];
-    Sums acc[kVoxelsPerThread];
-    for (int k = 0; k < kVoxelsPerThread; ++k) {
-        const int v = threadIdx.x + k * kThreads; // OpenVDB order: x * 64 + y * 8 + z
-        voxel[k] = v;
-        active[k] = (p.leafActive[8 * leaf + (v >> 6)] >> (v & 63)) & 1ull;
-        vx[k] = float((v >> 6) * p.dx), vy[k] = float(((v >> 3) & 7) * p.dx),
-        vz[k] = float((v & 7) * p.dx);
-    }
-
-    // The occupied cells overlapping the leaf's voxel box widened by R.
     long long c0[3], c1[3];
     for (int a = 0; a < 3; ++a) {
-        c0[a] = cellCoord(p.cells, o[a] - p.R, a);
-        c1[a] = cellCoord(p.cells, o[a] + 7 * p.dx + p.R, a);
+        c0[a] = cellCoord(p.cells, o[a] + lo[a], a);
+        c1[a] = cellCoord(p.cells, o[a] + hi[a], a);
     }
     const long long nx = c1[0] - c0[0] + 1, ny = c1[1] - c0[1] + 1, nz = c1[2] - c0[2] + 1;
     const long long boxCells = nx * ny * nz;
     for (long long chunk = 0; chunk < boxCells; chunk += kCellChunk) {
         if (threadIdx.x == 0) cellsInChunk = 0;
         __syncthreads();
-        // The occupied cells of the chunk, compacted in candidate order (warp ballots and the
-        // warps' counts): the particles are summed in the same order on every run, so the
-        // values, and the files written from them, are reproducible bit for bit.
         for (int round = 0; round < kCellChunk / kThreads; ++round) {
             const long long c = chunk + round * kThreads + threadIdx.x;
             long long at = -1;
-            if (c < boxCells) {
-                const long long cx = c0[0] + c % nx, cy = c0[1] + (c / nx) % ny,
-                                cz = c0[2] + c / (nx * ny);
-                at = findCell(p.cells, cx, cy, cz);
-            }
+            if (c < boxCells)
+                at =
+                    findCell(p.cells, c0[0] + c % nx, c0[1] + (c / nx) % ny, c0[2] + c / (nx * ny));
             const unsigned found = __ballot_sync(0xffffffffu, at >= 0);
             const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
             if (lane == 0) warpFound[warp] = __popc(found);
@@ -104,77 +122,287 @@ __global__ void __launch_bounds__(kThreads) gatherKernel(Params p)
                 cellPrefix[i + 1] += cellPrefix[i];
         }
         __syncthreads();
-        const uint32_t total = cellPrefix[cells];
-        for (uint32_t base = 0; base < total; base += kTile) {
-            const uint32_t flat = base + threadIdx.x;
-            if (threadIdx.x < kTile) {
-                float4 q = make_float4(3e30f, 3e30f, 3e30f, 0.f); // past the end: adds nothing
-                if (flat < total) {
-                    int lo = 0, hi = cells - 1; // last cell whose prefix <= flat
-                    while (lo < hi) {
-                        const int mid = (lo + hi + 1) / 2;
-                        if (cellPrefix[mid] <= flat)
-                            lo = mid;
-                        else
-                            hi = mid - 1;
-                    }
-                    const uint32_t i = cellBegin[lo] + (flat - cellPrefix[lo]);
-                    const float3 x = p.cells.positions[i];
-                    // Leaf-local coordinates, computed like the CPU (difference in double).
-                    q = make_float4(float(double(x.x) - o[0]), float(double(x.y) - o[1]),
-                                    float(double(x.z) - o[2]),
-                                    p.cells.radii ? p.cells.radii[i] : 0.f);
-                }
-                tile[threadIdx.x] = q;
+        visit(cellBegin, cellPrefix, cells);
+        __syncthreads();
+    }
+}
+
+/// Particle flat of a chunk's cells (flat < cellPrefix[cells]).
+__device__ uint32_t particleAt(const uint32_t* cellBegin, const uint32_t* cellPrefix, int cells,
+                               uint32_t flat)
+{
+    int lo = 0, hi = cells - 1; // the last cell whose prefix <= flat
+    while (lo < hi) {
+        const int mid = (lo + hi + 1) / 2;
+        if (cellPrefix[mid] <= flat)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    return cellBegin[lo] + (flat - cellPrefix[lo]);
+}
+
+/// Leaf-local coordinates of particle i (the CPU's: the difference in double), and whether it
+/// lies inside the open box (lo, hi).
+__device__ bool localOf(const Params& p, uint32_t i, const double o[3], const double lo[3],
+                        const double hi[3], double l[3])
+{
+    const float3 x = p.cells.positions[i];
+    l[0] = double(x.x) - o[0], l[1] = double(x.y) - o[1], l[2] = double(x.z) - o[2];
+    return l[0] > lo[0] && l[0] < hi[0] && l[1] > lo[1] && l[1] < hi[1] && l[2] > lo[2] &&
+           l[2] < hi[2];
+}
+
+struct Shared
+{
+    uint32_t cellBegin[kCellChunk], cellPrefix[kCellChunk + 1];
+    int warpFound[kThreads / 32];
+    int cellsInChunk;
+    uint32_t total; // particles gathered so far
+    int activeCount;
+    unsigned short active[512];
+};
+
+/// How many particles each leaf gathers (the size of its part of the scratch arrays).
+__global__ void __launch_bounds__(kThreads) countKernel(Params p)
+{
+    __shared__ Shared sh;
+    const size_t leaf = p.leafBase + blockIdx.x;
+    double o[3], lo[3], hi[3];
+    if (!leafBox(p, leaf, o, lo, hi)) {
+        if (threadIdx.x == 0) p.counts[blockIdx.x] = 0;
+        return;
+    }
+    if (threadIdx.x == 0) sh.total = 0;
+    forEachCellChunk(p, o, lo, hi, sh.cellBegin, sh.cellPrefix, sh.warpFound, sh.cellsInChunk,
+                     [&](const uint32_t* begin, const uint32_t* prefix, int cells) {
+                         uint32_t n = 0;
+                         double l[3];
+                         for (uint32_t f = threadIdx.x; f < prefix[cells]; f += kThreads)
+                             n += localOf(p, particleAt(begin, prefix, cells, f), o, lo, hi, l);
+                         atomicAdd(&sh.total, n);
+                     });
+    if (threadIdx.x == 0) p.counts[blockIdx.x] = sh.total;
+}
+
+struct Lanes
+{
+    float w = 0, d0 = 0, d1 = 0, d2 = 0, r = 0, g0 = 0, g1 = 0, g2 = 0, m0 = 0, m1 = 0, m2 = 0,
+          m3 = 0, m4 = 0, m5 = 0;
+};
+
+/// One particle on one lane: wideSums' steps (GatherField.cc), fused where it fuses.
+__device__ __forceinline__ void addParticle(Lanes& a, float4 q, float vx, float vy, float vz,
+                                            float invR2, bool ssp07, bool radii)
+{
+    const float ex = __fsub_rn(q.x, vx), ey = __fsub_rn(q.y, vy), ez = __fsub_rn(q.z, vz);
+    const float d2 = __fmaf_rn(ez, ez, __fmaf_rn(ex, ex, __fmul_rn(ey, ey)));
+    const float t = __fmaf_rn(-d2, invR2, 1.f);
+    // Particles at t <= 1e-6 add exact zeros on the CPU (to sums that are never -0): left out.
+    if (!(t > 1e-6f)) return;
+    const float t2 = __fmul_rn(t, t), wt = __fmul_rn(t2, t);
+    a.w = __fadd_rn(a.w, wt);
+    a.d0 = __fmaf_rn(wt, ex, a.d0), a.d1 = __fmaf_rn(wt, ey, a.d1), a.d2 = __fmaf_rn(wt, ez, a.d2);
+    if (radii) a.r = __fmaf_rn(wt, q.w, a.r);
+    if (ssp07) {
+        const float gx = __fmul_rn(t2, ex), gy = __fmul_rn(t2, ey), gz = __fmul_rn(t2, ez);
+        a.g0 = __fadd_rn(a.g0, gx), a.g1 = __fadd_rn(a.g1, gy), a.g2 = __fadd_rn(a.g2, gz);
+        a.m0 = __fmaf_rn(gx, ex, a.m0), a.m1 = __fmaf_rn(gx, ey, a.m1);
+        a.m2 = __fmaf_rn(gx, ez, a.m2), a.m3 = __fmaf_rn(gy, ey, a.m3);
+        a.m4 = __fmaf_rn(gy, ez, a.m4), a.m5 = __fmaf_rn(gz, ez, a.m5);
+    }
+}
+
+/// The 8 lanes of a group added as the CPU adds a register's lanes: ((l0 + l1) + (l2 + l3)) +
+/// ((l4 + l5) + (l6 + l7)); lane 0 of the group gets it.
+__device__ __forceinline__ float laneSum(float v, unsigned group)
+{
+    v = __fadd_rn(v, __shfl_xor_sync(group, v, 1));
+    v = __fadd_rn(v, __shfl_xor_sync(group, v, 2));
+    return __fadd_rn(v, __shfl_xor_sync(group, v, 4));
+}
+
+/// One leaf: its particles gathered (cell order) and sorted by bucket into the scratch arrays,
+/// then every active voxel summed by a group of 8 threads. Dynamic shared memory: one counter a
+/// bucket (slabCount * binCount^2, + 1).
+__global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
+{
+    __shared__ Shared sh;
+    extern __shared__ uint32_t bucketEnd[];
+    const size_t leaf = p.leafBase + blockIdx.x;
+    const GatherLayout& g = p.layout;
+    const int B = g.binCount(), buckets = g.slabCount() * B * B;
+    const unsigned long long base = p.candidateOffsets[blockIdx.x];
+    float4* gathered = p.gathered + base;
+    uint32_t* bucketOf = p.bucketOf + base;
+    float4* sorted = p.sorted + base;
+    double o[3], lo[3], hi[3];
+    const bool any = leafBox(p, leaf, o, lo, hi);
+
+    // 1. Gathered in cell order (each tile of the chunk compacted in order), bucket counts.
+    for (int b = threadIdx.x; b < buckets; b += kThreads)
+        bucketEnd[b] = 0;
+    if (threadIdx.x == 0) sh.total = 0, sh.activeCount = 0;
+    __syncthreads();
+    if (any)
+        forEachCellChunk(p, o, lo, hi, sh.cellBegin, sh.cellPrefix, sh.warpFound, sh.cellsInChunk,
+                         [&](const uint32_t* begin, const uint32_t* prefix, int cells) {
+                             const uint32_t n = prefix[cells];
+                             for (uint32_t tile = 0; tile < n; tile += kThreads) {
+                                 const uint32_t f = tile + threadIdx.x;
+                                 double l[3];
+                                 uint32_t i = 0;
+                                 bool in = false;
+                                 if (f < n) {
+                                     i = particleAt(begin, prefix, cells, f);
+                                     in = localOf(p, i, o, lo, hi, l);
+                                 }
+                                 const unsigned found = __ballot_sync(0xffffffffu, in);
+                                 const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+                                 if (lane == 0) sh.warpFound[warp] = __popc(found);
+                                 __syncthreads();
+                                 uint32_t at = sh.total + __popc(found & ((1u << lane) - 1u));
+                                 for (int w = 0; w < warp; ++w)
+                                     at += sh.warpFound[w];
+                                 if (in) {
+                                     const float lz = float(l[2]);
+                                     const uint32_t bucket = uint32_t(
+                                         (g.slabOf(lz) * B + g.binOf(l[0])) * B + g.binOf(l[1]));
+                                     gathered[at] =
+                                         make_float4(float(l[0]), float(l[1]), lz,
+                                                     p.cells.radii ? p.cells.radii[i] : 0.f);
+                                     bucketOf[at] = bucket;
+                                     atomicAdd(&bucketEnd[bucket], 1u);
+                                 }
+                                 __syncthreads();
+                                 if (threadIdx.x == 0)
+                                     for (int w = 0; w < kThreads / 32; ++w)
+                                         sh.total += sh.warpFound[w];
+                                 __syncthreads();
+                             }
+                         });
+    __syncthreads();
+    const uint32_t total = sh.total;
+
+    // 2. Bucket starts (exclusive sums: each thread a run of buckets, then the runs' totals).
+    {
+        const int per = (buckets + kThreads - 1) / kThreads;
+        const int b0 = min(buckets, int(threadIdx.x) * per), b1 = min(buckets, b0 + per);
+        uint32_t run = 0;
+        for (int b = b0; b < b1; ++b)
+            run += bucketEnd[b];
+        __shared__ uint32_t runStart[kThreads];
+        runStart[threadIdx.x] = run;
+        __syncthreads();
+        if (threadIdx.x == 0)
+            for (int t = 0, sum = 0; t < kThreads; ++t) {
+                const uint32_t r = runStart[t];
+                runStart[t] = sum, sum += r;
             }
-            __syncthreads();
-            const int n = min(kTile, int(total - base));
-            for (int k = 0; k < kVoxelsPerThread; ++k) {
-                if (!active[k]) continue;
-                Sums& a = acc[k];
-                for (int j = 0; j < n; ++j) {
-                    const float4 q = tile[j];
-                    const float ex = q.x - vx[k], ey = q.y - vy[k], ez = q.z - vz[k];
-                    const float s2 = (ex * ex + ey * ey + ez * ez) * invR2;
-                    float t = 1.f - s2;
-                    if (!(t > 1e-6f)) continue; // the CPU's cut-off (FieldValue.h)
-                    const float t2 = t * t, wt = t2 * t;
-                    a.w += wt;
-                    a.d0 += wt * ex, a.d1 += wt * ey, a.d2 += wt * ez;
-                    a.r += wt * q.w;
-                    const float gx = t2 * ex, gy = t2 * ey, gz = t2 * ez;
-                    a.g0 += gx, a.g1 += gy, a.g2 += gz;
-                    a.m0 += gx * ex, a.m1 += gx * ey, a.m2 += gx * ez;
-                    a.m3 += gy * ey, a.m4 += gy * ez, a.m5 += gz * ez;
-                }
-            }
-            __syncthreads();
+        __syncthreads();
+        uint32_t at = runStart[threadIdx.x];
+        for (int b = b0; b < b1; ++b) {
+            const uint32_t c = bucketEnd[b];
+            bucketEnd[b] = at, at += c;
         }
     }
-    for (int k = 0; k < kVoxelsPerThread; ++k) {
-        float value = p.constants.background;
-        if (active[k]) {
-            const Sums& a = acc[k];
-            field::FieldSums s;
-            s.w = a.w, s.r = a.r;
-            s.d[0] = a.d0, s.d[1] = a.d1, s.d[2] = a.d2;
-            s.g[0] = a.g0, s.g[1] = a.g1, s.g[2] = a.g2;
-            s.m[0] = a.m0, s.m[1] = a.m1, s.m[2] = a.m2, s.m[3] = a.m3, s.m[4] = a.m4,
-            s.m[5] = a.m5;
-            value = field::fieldValue(s, p.constants);
+    __syncthreads();
+
+    // 3. Sorted stably by one warp, 32 particles at a time in gather order: those of one bucket
+    // go to its cursor in lane order. The cursors end as the buckets' ends.
+    if (threadIdx.x < 32) {
+        const unsigned lane = threadIdx.x;
+        for (uint32_t at = 0; at < total; at += 32) {
+            const bool valid = at + lane < total;
+            const uint32_t bucket = valid ? bucketOf[at + lane] : 0xffffffffu;
+            const unsigned peers = __match_any_sync(0xffffffffu, bucket);
+            const int leader = __ffs(peers) - 1;
+            uint32_t start = 0;
+            if (valid && int(lane) == leader)
+                start = bucketEnd[bucket], bucketEnd[bucket] += __popc(peers);
+            start = __shfl_sync(0xffffffffu, start, leader);
+            if (valid) sorted[start + __popc(peers & ((1u << lane) - 1u))] = gathered[at + lane];
         }
-        if (!p.compactOffsets) {
-            p.out[size_t(leaf) * 512 + voxel[k]] = value;
-        } else if (active[k]) {
-            // Rank of the voxel among the leaf's active voxels: the bits below it.
-            const int v = voxel[k], word = v >> 6;
-            uint32_t rank = __popcll(p.leafActive[8 * leaf + word] & ((1ull << (v & 63)) - 1));
-            for (int w = 0; w < word; ++w)
-                rank += __popcll(p.leafActive[8 * leaf + w]);
-            p.out[p.compactOffsets[leaf] + rank] = value;
+    }
+    // The active voxels, in any order (each is summed alone).
+    for (int v = threadIdx.x; v < 512; v += kThreads) {
+        const bool on = (p.leafActive[8 * leaf + (v >> 6)] >> (v & 63)) & 1ull;
+        if (on)
+            sh.active[atomicAdd(&sh.activeCount, 1)] = (unsigned short)(v);
+        else if (!p.compactOffsets)
+            p.out[leaf * 512 + v] = p.constants.background;
+    }
+    __syncthreads();
+
+    // 4. The sums: group `group` of 8 threads takes every kGroups-th active voxel.
+    const int lane8 = threadIdx.x & 7;
+    const unsigned groupMask = 0xffu << (threadIdx.x & 24);
+    const bool radii = p.cells.radii != nullptr, ssp07 = p.constants.ssp07;
+    for (int a = threadIdx.x >> 3; a < sh.activeCount; a += kGroups) {
+        const int v = sh.active[a], i = v >> 6, j = (v >> 3) & 7, k = v & 7;
+        const double rowX = i * g.dx;
+        const float vx = float(rowX), vy = float(j * g.dx), vz = float(k * g.dx);
+        const int xlo = g.binOf(rowX - g.R), xhi = g.binOf(rowX + g.R);
+        Lanes acc;
+        unsigned picked = 0; // row-picked particles of the window so far
+        for (int z = k; z < k + g.window; ++z) {
+            // sections (z, xlo) to (z, xhi): buckets (z B + x) B + y, one run
+            const int first = (z * B + xlo) * B, end = (z * B + xhi + 1) * B;
+            const uint32_t e = bucketEnd[end - 1];
+            for (uint32_t s = first ? bucketEnd[first - 1] : 0; s < e; s += 8) {
+                const uint32_t at = s + lane8;
+                float4 q = make_float4(0.f, 0.f, 0.f, 0.f);
+                bool pick = false;
+                if (at < e) {
+                    q = sorted[at];
+                    const float ex = __fsub_rn(q.x, vx), ey = __fsub_rn(q.y, vy);
+                    pick = __fadd_rn(__fmul_rn(ex, ex), __fmul_rn(ey, ey)) < p.R2;
+                }
+                const unsigned bits =
+                    (__ballot_sync(groupMask, pick) >> (threadIdx.x & 24)) & 0xffu;
+                // this lane's particle, if any: the ((lane - picked) mod 8)-th picked
+                unsigned left = bits;
+                for (unsigned n = (lane8 - picked) & 7u; n > 0 && left; --n)
+                    left &= left - 1;
+                const int from = left ? __ffs(left) - 1 : lane8;
+                const int src = (threadIdx.x & 31 & ~7) + from;
+                float4 mine;
+                mine.x = __shfl_sync(groupMask, q.x, src);
+                mine.y = __shfl_sync(groupMask, q.y, src);
+                mine.z = __shfl_sync(groupMask, q.z, src);
+                mine.w = __shfl_sync(groupMask, q.w, src);
+                if (left) addParticle(acc, mine, vx, vy, vz, p.invR2, ssp07, radii);
+                picked += __popc(bits);
+            }
+        }
+        field::FieldSums sums;
+        sums.w = laneSum(acc.w, groupMask), sums.r = laneSum(acc.r, groupMask);
+        sums.d[0] = laneSum(acc.d0, groupMask), sums.d[1] = laneSum(acc.d1, groupMask);
+        sums.d[2] = laneSum(acc.d2, groupMask);
+        sums.g[0] = laneSum(acc.g0, groupMask), sums.g[1] = laneSum(acc.g1, groupMask);
+        sums.g[2] = laneSum(acc.g2, groupMask);
+        sums.m[0] = laneSum(acc.m0, groupMask), sums.m[1] = laneSum(acc.m1, groupMask);
+        sums.m[2] = laneSum(acc.m2, groupMask), sums.m[3] = laneSum(acc.m3, groupMask);
+        sums.m[4] = laneSum(acc.m4, groupMask), sums.m[5] = laneSum(acc.m5, groupMask);
+        if (lane8 == 0) {
+            const float value = field::fieldValue(sums, p.constants);
+            if (!p.compactOffsets) {
+                p.out[leaf * 512 + v] = value;
+            } else {
+                // Rank of the voxel among the leaf's active voxels: the bits below it.
+                const int word = v >> 6;
+                uint32_t rank = __popcll(p.leafActive[8 * leaf + word] & ((1ull << (v & 63)) - 1));
+                for (int w = 0; w < word; ++w)
+                    rank += __popcll(p.leafActive[8 * leaf + w]);
+                p.out[p.compactOffsets[leaf] + rank] = value;
+            }
         }
     }
 }
+
+/// Scratch particles a batch of leaves may take at once (36 bytes each: gathered, its bucket,
+/// sorted); a leaf with more runs alone.
+constexpr unsigned long long kBatchParticles = 1ull << 22;
 
 } // namespace
 
@@ -190,21 +418,75 @@ field::FieldConstants fieldConstants(const FieldSettings& s, bool perParticleRad
     return c;
 }
 
+size_t gatherSharedBytes(double voxelSize, double influenceRadius)
+{
+    const GatherLayout g = GatherLayout::of(voxelSize, influenceRadius);
+    return size_t(g.slabCount()) * g.binCount() * g.binCount() * sizeof(uint32_t);
+}
+
+bool gatherFits(double voxelSize, double influenceRadius)
+{
+    if (!(voxelSize > 0 && influenceRadius > 0 && influenceRadius / voxelSize < 1e6)) return false;
+    int device = 0, optin = 0;
+    if (cudaGetDevice(&device) != cudaSuccess ||
+        cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, device) !=
+            cudaSuccess)
+        return false;
+    return gatherSharedBytes(voxelSize, influenceRadius) + sizeof(Shared) + 1024 <= size_t(optin);
+}
+
 void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsigned long long* masks,
                   size_t leafCount, double voxelSize, const field::FieldConstants& constants,
-                  float* out, cudaStream_t stream, const uint32_t* compactOffsets)
+                  float* out, DeviceMemory& mem, cudaStream_t stream,
+                  const uint32_t* compactOffsets)
 {
     if (leafCount == 0) return;
+    const double R = constants.influenceRadius;
+    if (!gatherFits(voxelSize, R))
+        throw Error("gatherField: the support radius spans too many voxels for the device's "
+                    "shared memory (R / voxel size " +
+                    std::to_string(R / voxelSize) + ")");
     Params p{};
     p.cells = cells;
     p.leafOrigins = origins;
     p.leafActive = masks;
-    p.dx = voxelSize, p.R = constants.influenceRadius;
+    p.layout = GatherLayout::of(voxelSize, R);
+    p.R2 = float(R * R), p.invR2 = float(1 / (R * R));
     p.constants = constants;
     p.out = out;
     p.compactOffsets = compactOffsets;
-    gatherKernel<<<unsigned(leafCount), kThreads, 0, stream>>>(p);
+    const size_t shared = gatherSharedBytes(voxelSize, R);
+    if (shared > 48 * 1024)
+        FLUIDSURF_CUDA_CHECK(cudaFuncSetAttribute(
+            fieldKernel, cudaFuncAttributeMaxDynamicSharedMemorySize, int(shared)));
+
+    // How many particles each leaf gathers, then the leaves in batches whose scratch fits.
+    p.counts = mem.alloc<uint32_t>(leafCount);
+    countKernel<<<unsigned(leafCount), kThreads, 0, stream>>>(p);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+    std::vector<uint32_t> counts(leafCount);
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(counts.data(), p.counts, leafCount * sizeof(uint32_t),
+                                         cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    mem.release(p.counts);
+    p.counts = nullptr;
+    std::vector<unsigned long long> offsets;
+    for (size_t begin = 0, end = 0; begin < leafCount; begin = end) {
+        offsets.clear();
+        unsigned long long total = 0;
+        for (end = begin;
+             end < leafCount && (end == begin || total + counts[end] <= kBatchParticles); ++end)
+            offsets.push_back(total), total += counts[end];
+        p.leafBase = begin;
+        p.candidateOffsets = mem.upload(offsets.data(), offsets.size());
+        p.gathered = mem.alloc<float4>(total), p.sorted = mem.alloc<float4>(total);
+        p.bucketOf = mem.alloc<uint32_t>(total);
+        fieldKernel<<<unsigned(end - begin), kThreads, shared, stream>>>(p);
+        FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+        for (const void* scratch : {(const void*)p.candidateOffsets, (const void*)p.gathered,
+                                    (const void*)p.sorted, (const void*)p.bucketOf})
+            mem.release(scratch);
+    }
 }
 
 std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* streamPtr)
@@ -239,7 +521,7 @@ std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* 
     const field::FieldConstants constants = fieldConstants(in.field, in.radii != nullptr);
     float* values = mem.alloc<float>(out.size());
     events.mark("upload");
-    gatherLeaves(cells, origins, masks, in.leafCount, in.field.voxelSize, constants, values,
+    gatherLeaves(cells, origins, masks, in.leafCount, in.field.voxelSize, constants, values, mem,
                  stream);
     events.mark("gather kernel");
     FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float),

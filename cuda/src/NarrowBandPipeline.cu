@@ -126,7 +126,7 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     uint32_t* offsets = activeOffsets(leaves.masks, leaves.count, activeCount, *m.mem, m.stream);
     float* values = m.mem->alloc<float>(activeCount);
     gatherLeaves(cells, leaves.origins, leaves.masks, leaves.count, m.voxelSize, m.constants,
-                 values, m.stream, offsets);
+                 values, *m.mem, m.stream, offsets);
     events.mark("gather");
 
     LeafBlocks out;
@@ -176,7 +176,7 @@ std::vector<float> NarrowBandPipeline::evaluate(const int32_t* origins, const ui
     const unsigned long long* k =
         m.mem->upload(reinterpret_cast<const unsigned long long*>(masks), 8 * leafCount);
     float* values = m.mem->alloc<float>(out.size());
-    gatherLeaves(m.cells, o, k, leafCount, m.voxelSize, m.constants, values, m.stream);
+    gatherLeaves(m.cells, o, k, leafCount, m.voxelSize, m.constants, values, *m.mem, m.stream);
     FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float),
                                          cudaMemcpyDeviceToHost, m.stream));
     events.mark("completion gather");

@@ -75,10 +75,12 @@ field::FieldConstants fieldConstants(const FieldSettings& s, bool perParticleRad
 /// phi for the 512 voxels of every leaf into out (leaf after leaf; inactive: background); or,
 /// with compactOffsets (per leaf, the number of active voxels in the leaves before it), only the
 /// active voxels, leaf after leaf in voxel order: a thin band fills ~15% of its leaves, so this
-/// is what goes back to the host.
+/// is what goes back to the host. The CPU's sums, bit for bit (GatherField.cu); synchronises
+/// once (the leaves' particle counts size the scratch). Throws where gatherFits is false.
 void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsigned long long* masks,
                   size_t leafCount, double voxelSize, const field::FieldConstants& constants,
-                  float* out, cudaStream_t stream, const uint32_t* compactOffsets = nullptr);
+                  float* out, DeviceMemory& mem, cudaStream_t stream,
+                  const uint32_t* compactOffsets = nullptr);
 
 /// Per leaf, the active voxels of the leaves before it (leafCount + 1 entries, the last is the
 /// total, which also comes back to the host; synchronises).

@@ -1,14 +1,16 @@
 #!/usr/bin/env bash
-# compare-outputs.sh OLD_FLUIDSURF NEW_FLUIDSURF [SHARED_DATA] [--device cpu|cuda]
+# compare-outputs.sh OLD_FLUIDSURF NEW_FLUIDSURF [SHARED_DATA] [--device cpu|cuda|OLD:NEW]
 # Proof that a restructuring changed no output: both binaries reconstruct every real frame of
 # SHARED_DATA/real and the generated scenes (default settings, and a few other field and mesher
 # settings), writing .vdb, .obj and .ply; every pair of files must be byte-identical. Runs on the
-# GPU machine too (no OpenVDB needed there), with --device cuda. Prints one line per case and
+# GPU machine too (no OpenVDB needed there), with --device cuda; --device cpu:cuda runs OLD on the
+# CPU and NEW on the GPU (one binary twice: the GPU makes the CPU's files). Prints one line per case and
 # 'compare: N passed, M failed'; exit 1 when any differ.
 set -uo pipefail
 OLD=$1 NEW=$2 SHARED=${3:-../shared/data}
 DEVICE=cpu
 [ "${4:-}" = "--device" ] && DEVICE=${5:-cpu}
+OLD_DEVICE=${DEVICE%%:*} NEW_DEVICE=${DEVICE##*:}
 T=$(mktemp -d /tmp/fluidsurf_compare_XXXXXX)
 trap 'rm -rf "$T"' EXIT
 pass=0 fail=0
@@ -19,13 +21,13 @@ run_case() {
     shift 3
     local ok=1
     for side in old new; do
-        local bin=$OLD
-        [ "$side" = new ] && bin=$NEW
+        local bin=$OLD device=$OLD_DEVICE
+        [ "$side" = new ] && bin=$NEW device=$NEW_DEVICE
         mkdir -p "$T/$side"
         local r=(-r "$radius")
         [ "$radius" = estimate ] && r=() # no -r: the radius is estimated
         if ! "$bin" reconstruct "$input" "${r[@]}" -o "$T/$side/$name.obj" \
-            --vdb "$T/$side/$name.vdb" --device "$DEVICE" -q "$@" >"$T/$side/$name.log" 2>&1; then
+            --vdb "$T/$side/$name.vdb" --device "$device" -q "$@" >"$T/$side/$name.log" 2>&1; then
             echo "FAIL $name: $side binary failed: $(tail -1 "$T/$side/$name.log")"
             ok=0
         fi

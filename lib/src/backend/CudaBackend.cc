@@ -8,6 +8,7 @@
 
 #ifdef FLUIDSURF_HAS_CUDA
 #include "classify/Classify.h"
+#include "field/GatherField.h"
 #include "mesh/MarchingCubes.h"
 #include "util/Memory.h"
 
@@ -185,6 +186,9 @@ public:
         }
         if (positions.size() >= (size_t(1) << 32) - 1)
             throw ValueError("more than 2^32 - 2 particles in one frame");
+        // A support of very many voxels: the device's gather lacks the shared memory (the CPU's
+        // band, and its field below).
+        if (!cuda::gatherFits(level.voxelSize, params.influenceRadius)) return false;
         auto pipeline = std::make_unique<cuda::NarrowBandPipeline>();
         Vec3f lo, hi;
         {
@@ -254,6 +258,8 @@ public:
                                     });
         if (!mIndex) throw Error("CUDA backend: evaluate() before the particles were given");
         const neighbors::CellIndex& particles = *mIndex;
+        if (!cuda::gatherFits(level.voxelSize, params.influenceRadius)) // (see narrowBand)
+            return field::evaluateField(tree, particles, params, level, ctx);
         cuda::GatherTimes times;
         const size_t evaluations =
             fillActiveVoxels(tree, [&](const int32_t* origins, const uint64_t* masks, size_t n) {

@@ -3,6 +3,7 @@
 
 #include "field/FieldValue.h"
 #include "field/FieldValueWide.h"
+#include "field/GatherLayout.h"
 #include "util/Floor.h"
 #include "util/Lanes.h"
 #include "util/SetBits.h"
@@ -201,58 +202,35 @@ struct Kernel
 {
     const neighbors::CellIndex& particles;
     FieldConstants constants;
-    double dx, R;
-    int reach; // slabs of width dx within R of a voxel on either side
+    GatherLayout layout;
     bool radii;
-    int binSlabs; // columns are this many slabs wide in x and y (few columns for large R)
-    int lanes;    // of the sums: util::kLanes or util::kWideLanes (fieldLanes())
-    double invDx = 1 / dx, invBinSlabs = 1.0 / binSlabs;
-    // The slabs a voxel reads, from reach below its own: 2 reach + 1, less the top one, whose
-    // particles never count. A voxel lies on its own slab's lower face, so the top slab starts
-    // reach dx >= R above it. With the float roundings (the voxel's z: at most 7 dx 2^-24; the
-    // difference, the squares, their sum and the scale by 1 / R^2: 2^-24 each), s^2 >= 1 -
-    // 14 2^-24 = 1 - 8.3e-7 there for reach >= 2, which addParticle counts as outside (t <=
-    // 1e-6: exact zeros, so every sum keeps its bits). A ninth fewer lanes at R = 4 dx. With
-    // reach 1 (voxels of R or more) that bound does not hold, and the slab stays.
-    int window = reach >= 2 ? 2 * reach : 2 * reach + 1;
+    int lanes; // of the sums: util::kLanes or util::kWideLanes (fieldLanes())
+    double dx = layout.dx, R = layout.R;
+    int reach = layout.reach, window = layout.window;
 
-    // Slabs per axis: the leaf's voxels and reach more on either side.
-    int slabCount() const { return LeafT::DIM + 2 * reach; }
-    int slabOf(double local) const
-    {
-        return std::clamp(int(util::floorOf(local * invDx)) + reach, 0, slabCount() - 1);
-    }
-    int binCount() const { return (slabCount() + binSlabs - 1) / binSlabs; }
-    int binOf(double local) const
-    {
-        return std::clamp(int(util::floorOf((local * invDx + reach) * invBinSlabs)), 0,
-                          binCount() - 1);
-    }
+    int slabCount() const { return layout.slabCount(); }
+    int slabOf(double local) const { return layout.slabOf(local); }
+    int binCount() const { return layout.binCount(); }
+    int binOf(double local) const { return layout.binOf(local); }
 
     // Gather the particles within R of the leaf's voxel box, relative to the leaf origin, and
     // sort them by z-slab and column. A row then reads only the columns near its (x, y) line
     // instead of testing every particle of the leaf (that test was most of the field stage in
     // thin bands).
-    // Only those near the box of the leaf's active voxels are gathered: the leaves the band's
-    // completion adds hold 23 active voxels on average, and the gather for the whole leaf was
-    // most of their cost. What is left out changes no sum: within a half voxel more than R of
-    // every active row's line in x or y, no row picks it (the float test is off by 1e-6 voxel
-    // at most); and half a voxel below the lowest active voxel's slab window or above the
-    // highest one's, it lies in no voxel's window ([b, e) in leaf()), while what a window's
-    // last lanes read past e lies beyond R either way (padding, or the higher slabs).
+    // Only those in the box of the leaf's active voxels are gathered (GatherLayout::box, which
+    // says why nothing left out counts): the leaves the band's completion adds hold 23 active
+    // voxels on average, and the gather for the whole leaf was most of their cost.
     void gather(const openvdb::Coord& origin, const openvdb::CoordBBox& active, Scratch& s) const
     {
         const double o[3] = {origin.x() * dx, origin.y() * dx, origin.z() * dx};
-        const double extent = (LeafT::DIM - 1) * dx;
+        const int first[3] = {active.min().x() - origin.x(), active.min().y() - origin.y(),
+                              active.min().z() - origin.z()},
+                  last[3] = {active.max().x() - origin.x(), active.max().y() - origin.y(),
+                             active.max().z() - origin.z()};
         double lo[3], hi[3], cellLo[3], cellHi[3]; // leaf-local; the cells' box in world units
-        for (int a = 0; a < 3; ++a) {
-            const double first = (active.min()[a] - origin[a]) * dx,
-                         last = (active.max()[a] - origin[a]) * dx;
-            const double below = a < 2 ? R : reach * dx, above = a < 2 ? R : (window - reach) * dx;
-            lo[a] = std::max(-R, first - below - 0.5 * dx);
-            hi[a] = std::min(extent + R, last + above + 0.5 * dx);
+        layout.box(first, last, lo, hi);
+        for (int a = 0; a < 3; ++a)
             cellLo[a] = o[a] + lo[a], cellHi[a] = o[a] + hi[a];
-        }
         s.x.clear(), s.y.clear(), s.z.clear(), s.r.clear(), s.key.clear(), s.columnY.clear();
         const int B = binCount();
         particles.forEachCellInBox(cellLo, cellHi, [&](uint32_t b, uint32_t e) {
@@ -434,16 +412,8 @@ size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& parti
     if (lanes == util::kWideLanes && fieldLanes() != lanes)
         throw ValueError("evaluateField: 8 lanes need a CPU with AVX2 and FMA");
     const bool radii = !particles.radii.empty();
-    const int reach = int(std::ceil(params.influenceRadius / level.voxelSize));
-    const int slabs = int(LeafT::DIM) + 2 * reach;
-    Kernel kernel{particles,
-                  fieldConstants(params, level, radii),
-                  level.voxelSize,
-                  params.influenceRadius,
-                  reach,
-                  radii,
-                  (slabs + 15) / 16, // at most 16 x 16 columns
-                  lanes};
+    Kernel kernel{particles, fieldConstants(params, level, radii),
+                  GatherLayout::of(level.voxelSize, params.influenceRadius), radii, lanes};
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
     std::atomic<size_t> evaluations{0};
     tbb::parallel_for(leaves.leafRange(1),

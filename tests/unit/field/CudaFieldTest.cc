@@ -1,18 +1,24 @@
 // CudaFieldTest.cc - the field on the GPU (Params::device = Cuda) against the CPU path: the
 // narrow band computed on the device from the sort on (the same classes, isolated particles and
-// active topology as the CPU; values within 1e-5 r, the same zero crossings), and the gather
-// alone for gather-full. Skipped with the reason where there is no usable GPU (CI); there, a
-// CUDA request must fail with a clear error.
+// active topology as the CPU), and the gather alone for gather-full. The values are the CPU's to
+// the bit where the CPU sums on 8 lanes (AVX2 and FMA, as on the GPU hosts), else within 1e-5 r
+// with the same zero crossings; so the whole reconstruction, post-processing included, makes the
+// same mesh on both. Skipped with the reason where there is no usable GPU (CI); there, a CUDA
+// request must fail with a clear error.
 #include "TestData.h"
 
 #include "unit/field/RequireGpu.h"
 
+#include "field/GatherField.h"
+
 #include <fluidsurf/Rasterize.h>
+#include <fluidsurf/Reconstruct.h>
 #include <fluidsurf/Scenes.h>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 namespace fluidsurf {
 namespace {
@@ -43,12 +49,16 @@ void expectSameField(const ParticleSet& ps, Params p, const std::string& what,
         << what << ": active topology differs";
     auto acc = gpu.grid->getConstAccessor();
     double worst = 0;
-    size_t signFlips = 0, n = 0;
+    size_t signFlips = 0, n = 0, otherBits = 0;
     for (auto it = cpu.grid->cbeginValueOn(); it; ++it, ++n) {
         const float a = *it, b = acc.getValue(it.getCoord());
         worst = std::max(worst, double(std::abs(a - b)));
         if (std::abs(a) > 1e-5 * p.radius && (a < 0) != (b < 0)) ++signFlips;
+        otherBits += std::memcmp(&a, &b, sizeof a) != 0;
     }
+    if (field::fieldLanes() == 8) // the CPU's sums (GatherField.h); with 4 lanes they differ
+        EXPECT_EQ(otherBits, 0u) << what << ": values with other bits, of " << n
+                                 << " (largest difference " << worst / p.radius << " r)";
     EXPECT_LE(worst, 1e-5 * p.radius)
         << what << ": largest difference " << worst / p.radius << " r over " << n << " voxels";
     EXPECT_EQ(signFlips, 0u) << what << ": zero crossings differ";
@@ -127,6 +137,45 @@ TEST(FieldCuda, MatchesCpuOnSparseAndDegenerateFrames)
         for (int j = 0; j < 3; ++j)
             lattice.push_back(Vec3f(float(i * 2 * r), float(j * 2 * r), 0.2f));
     expectSameField(frame(lattice), Params::fromRadius(r), "lattice_rows");
+}
+
+/// The whole reconstruction (band, field, completion, marching cubes, post-processing, spheres)
+/// on the GPU and on the CPU: the same mesh, byte for byte, where the CPU sums on 8 lanes.
+void expectSameReconstruction(const ParticleSet& ps, ReconstructParams p, const std::string& what)
+{
+    SCOPED_TRACE(what);
+    Context onCpu(Device::Cpu), onGpu(Device::Cuda);
+    const ReconstructResult cpu = reconstruct(ps, p, onCpu, what);
+    const ReconstructResult gpu = reconstruct(ps, p, onGpu, what);
+    EXPECT_NE(gpu.field.device, "cpu");
+    ASSERT_FALSE(cpu.mesh.empty());
+    ASSERT_EQ(cpu.mesh.triangles.size(), gpu.mesh.triangles.size());
+    ASSERT_EQ(cpu.mesh.points.size(), gpu.mesh.points.size());
+    EXPECT_TRUE(cpu.mesh.triangles == gpu.mesh.triangles);
+    EXPECT_EQ(0, std::memcmp(cpu.mesh.points.data(), gpu.mesh.points.data(),
+                             cpu.mesh.points.size() * sizeof(Vec3f)));
+    ASSERT_EQ(cpu.mesh.normals.size(), gpu.mesh.normals.size());
+    EXPECT_EQ(0, std::memcmp(cpu.mesh.normals.data(), gpu.mesh.normals.data(),
+                             cpu.mesh.normals.size() * sizeof(Vec3f)));
+}
+
+TEST(FieldCuda, TheWholeReconstructionMakesTheCpusMesh)
+{
+    FLUIDSURF_REQUIRE_GPU();
+    if (field::fieldLanes() != 8) GTEST_SKIP() << "the CPU sums on 4 lanes here (no AVX2 and FMA)";
+    FLUIDSURF_REQUIRE_SHARED_DATA();
+    for (const test::RealFrame& f : test::kRealFrames)
+        expectSameReconstruction(io::readParticles(test::sharedData() + "/real/" + f.name),
+                                 ReconstructParams::fromRadius(f.radius), f.name);
+    SceneParams sp;
+    sp.count = 30000;
+    const ParticleSet drop = generateScene(Scene::Drop, sp);
+    ReconstructParams p = ReconstructParams::fromRadius(sp.radius);
+    p.field.voxelSize = 0.5; // (in r) a finer grid: reach 8, columns of 2 slabs
+    expectSameReconstruction(drop, p, "drop_voxel0.5");
+    p = ReconstructParams::fromRadius(sp.radius);
+    p.field.field = FieldKind::Zb05;
+    expectSameReconstruction(drop, p, "drop_zb05");
 }
 
 TEST(FieldCuda, FarFromTheOriginTheCpuBandIsUsed)
