@@ -55,7 +55,7 @@ struct GatherTimes
 
 /// Whether the device gather runs at this voxel size and support radius: it keeps a counter for
 /// each of a leaf's slab-and-column bins in shared memory, which grows with (R / voxel size)^3
-/// above 16 slabs an axis; past the device's limit (R of about 80 voxels on an H100) the CPU's
+/// above 16 slabs an axis; past the device's limit (R of about 100 voxels on an H100) the CPU's
 /// field is used. False also without a usable device.
 bool gatherFits(double voxelSize, double influenceRadius);
 

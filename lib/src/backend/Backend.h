@@ -56,9 +56,10 @@ public:
 
     /// The band of half width `width` (effectiveBandWidth) around the surface particles, with
     /// phi at its voxels; timed in ctx under the backend's own stage names. Returns false, having
-    /// done nothing, when this backend cannot take the frame (the GPU's leaf keys).
+    /// done nothing, when this backend cannot take the frame, and says why in `whyNot` (the GPU's
+    /// leaf keys, or its gather's shared memory).
     virtual bool narrowBand(const Particles& particles, const Params& params, const Level& level,
-                            double width, Context& ctx, Band& out) = 0;
+                            double width, Context& ctx, Band& out, std::string& whyNot) = 0;
 
     /// Particles indexed on the CPU (the baselines' cell index, isolated ones removed) for
     /// evaluate().

@@ -54,7 +54,7 @@ public:
     std::string name() const override { return "cpu"; }
 
     bool narrowBand(const Particles& particles, const Params& params, const Level& level,
-                    double width, Context& ctx, Band& out) override
+                    double width, Context& ctx, Band& out, std::string& /*whyNot*/) override
     {
         // the classes alone: the band and the field's particles need nothing else
         Classified c = classifyOnCpu(particles, params, ctx, out);

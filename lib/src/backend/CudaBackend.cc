@@ -167,6 +167,10 @@ struct MeshLeaves
     }
 };
 
+/// Why a frame's field is the CPU's: the device gather keeps a counter for each of a leaf's
+/// slab-and-column bins in shared memory (cuda::gatherFits).
+constexpr const char* kSupportTooWide = "the support spans more voxels than the GPU's gather holds";
+
 class CudaBackend : public Backend
 {
 public:
@@ -175,7 +179,7 @@ public:
     std::string name() const override { return mName; }
 
     bool narrowBand(const Particles& particles, const Params& params, const Level& level,
-                    double width, Context& ctx, Band& out) override
+                    double width, Context& ctx, Band& out, std::string& whyNot) override
     {
         const std::vector<Vec3f>& positions = particles.positions;
         const std::vector<float>& radii = particles.radii;
@@ -188,7 +192,10 @@ public:
             throw ValueError("more than 2^32 - 2 particles in one frame");
         // A support of very many voxels: the device's gather lacks the shared memory (the CPU's
         // band, and its field below).
-        if (!cuda::gatherFits(level.voxelSize, params.influenceRadius)) return false;
+        if (!cuda::gatherFits(level.voxelSize, params.influenceRadius)) {
+            whyNot = kSupportTooWide;
+            return false;
+        }
         auto pipeline = std::make_unique<cuda::NarrowBandPipeline>();
         Vec3f lo, hi;
         {
@@ -200,8 +207,10 @@ public:
         const double dx = level.voxelSize, limit = double(1 << 20) * 8 * dx;
         for (int a = 0; a < 3; ++a)
             if (!(std::abs(double(lo[a]) - width) < limit - 16 * dx &&
-                  std::abs(double(hi[a]) + width) < limit - 16 * dx))
+                  std::abs(double(hi[a]) + width) < limit - 16 * dx)) {
+                whyNot = "the frame lies beyond the GPU's leaf keys";
                 return false;
+            }
         ctx.throwIfCancelled();
 
         cuda::PipelineSettings s;
@@ -258,8 +267,10 @@ public:
                                     });
         if (!mIndex) throw Error("CUDA backend: evaluate() before the particles were given");
         const neighbors::CellIndex& particles = *mIndex;
-        if (!cuda::gatherFits(level.voxelSize, params.influenceRadius)) // (see narrowBand)
+        if (!cuda::gatherFits(level.voxelSize, params.influenceRadius)) { // (see narrowBand)
+            mCpuField = true;
             return field::evaluateField(tree, particles, params, level, ctx);
+        }
         cuda::GatherTimes times;
         const size_t evaluations =
             fillActiveVoxels(tree, [&](const int32_t* origins, const uint64_t* masks, size_t n) {
@@ -290,6 +301,7 @@ public:
 
     void deviceStats(RasterizeStats& stats) const override
     {
+        if (mCpuField && !mPipeline) stats.device = "cpu (" + std::string(kSupportTooWide) + ")";
         if (mPipeline) {
             stats.gpuStages.clear();
             for (const auto& st : mPipeline->stageMs())
@@ -348,6 +360,7 @@ private:
     const neighbors::CellIndex* mIndex = nullptr;
     std::vector<StageTime> mGatherStages;
     size_t mGatherBytes = 0;
+    bool mCpuField = false; ///< evaluate() ran the CPU's gather (see kSupportTooWide)
 };
 
 } // namespace

@@ -55,11 +55,12 @@ struct Run
         backend::Band band;
         std::unique_ptr<backend::Backend> cpu;
         backend::Backend* on = &b;
-        if (!b.narrowBand(particles, params, level, stats.bandWidth, ctx, band)) {
+        if (std::string whyNot;
+            !b.narrowBand(particles, params, level, stats.bandWidth, ctx, band, whyNot)) {
             cpu = backend::makeCpuBackend();
             on = cpu.get();
-            stats.device = "cpu (the frame lies beyond the GPU's leaf keys)";
-            on->narrowBand(particles, params, level, stats.bandWidth, ctx, band);
+            stats.device = "cpu (" + whyNot + ")";
+            on->narrowBand(particles, params, level, stats.bandWidth, ctx, band, whyNot);
         }
         take(band);
         const auto t = ctx.scope("complete band");

@@ -178,6 +178,27 @@ TEST(FieldCuda, TheWholeReconstructionMakesTheCpusMesh)
     expectSameReconstruction(drop, p, "drop_zb05");
 }
 
+TEST(FieldCuda, ASupportOfManyVoxelsGoesToTheCpu)
+{
+    // R = 4r at voxel r / 30: 134 voxels of reach, 276 slabs a leaf axis; the device gather's bin
+    // counters (276 x 16 x 16, 283 KB) pass any GPU's shared memory, so the CPU takes the band
+    // and the field, says why, and the grid is the CPU's.
+    FLUIDSURF_REQUIRE_GPU();
+    ParticleSet ps;
+    ps.positions = {Vec3f(0, 0, 0), Vec3f(1.5f, 0, 0), Vec3f(0.7f, 1.2f, 0.1f)};
+    Params p = Params::fromRadius(1.0);
+    p.voxelSize = 1.0 / 30;
+    for (FieldMethod method : {FieldMethod::NarrowBand, FieldMethod::GatherFull}) {
+        p.method = method;
+        const std::string what = method == FieldMethod::NarrowBand ? "band" : "gather_full";
+        expectSameField(ps, p, "support_of_134_voxels_" + what, false);
+        Context onGpu(Device::Cuda);
+        EXPECT_EQ(rasterizeParticles(ps, p, onGpu).stats.device,
+                  "cpu (the support spans more voxels than the GPU's gather holds)")
+            << what;
+    }
+}
+
 TEST(FieldCuda, FarFromTheOriginTheCpuBandIsUsed)
 {
     // Leaf keys on the device hold 2^20 leaves (8.4M voxels) either side of the origin. Beyond,
