@@ -1,9 +1,9 @@
 // NarrowBandPipeline.h - the whole narrow-band field on the GPU (host facade, no CUDA syntax):
 // upload, Morton keys, radix sort, cells, classification, band marking and the SSP07 / ZB05
 // gather, on one stream, producing leaf blocks (origin + active bits + 512 values) that the host
-// turns into a FloatTree. Every stage repeats the CPU's arithmetic where it decides topology
-// (cells, classes, band), so the grid has the CPU's active voxels; only the field sums run in a
-// different order (values agree to ~1e-6 r).
+// turns into a FloatTree. Every stage repeats the CPU's arithmetic (cells, classes, band, and the
+// field's picks, order, lanes and fused steps: FieldGather.h), so the grid has the CPU's active
+// voxels and values.
 //
 // Usage: upload() returns the particles' bounds; the host derives the cell grid from them with
 // its own arithmetic (neighbors::cellGrid); run() does the rest. The particles stay on the device

@@ -12,8 +12,9 @@
 // points each level needs, all evaluated by the same backend; the result holds the three grids.
 //
 // The stages up to the field run on the Context's backend (lib/src/backend): the CPU (TBB), or
-// with Device::Cuda (or Auto and a GPU) the GPU, which gives the same active voxels and classes
-// and values within 1e-5 r of the CPU's. Band completion asks the same backend for its new
+// with Device::Cuda (or Auto and a GPU) the GPU, which gives the same active voxels, classes and
+// values as the CPU, to the bit where the CPU has AVX2 and FMA (else within 1e-5 r: the CPU then
+// sums on 4 lanes, field::fieldLanes). Band completion asks the same backend for its new
 // voxels. Isolated particles (no neighbour within h) are left out of the grid and listed in the
 // result. The output is identical for any thread count (Context::setThreads).
 #pragma once

@@ -164,7 +164,8 @@ size_t collapseCracks(TriangleMesh& mesh, std::vector<CrackPath>& paths, std::ve
         size_t toA = n / 2;
         if (n % 2) {
             // Nearer b by a clear margin: to b; else to a. The margin keeps the choice the same
-            // under rounding (the GPU's values differ from the CPU's by about 1e-6 r), and a
+            // under rounding (a CPU without AVX2 sums the field on 4 lanes, and its values
+            // differ from the GPU's by about 1e-6 r), and a
             // middle point is often as near one end as the other (a flat face).
             const Vec3f& middle = mesh.points[path.between[n / 2]];
             const double da = squaredLength(middle, mesh.points[path.a]),

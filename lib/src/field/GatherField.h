@@ -28,7 +28,8 @@ namespace field {
 
 /// The lanes the sums run on by default: 8 where the CPU has AVX2 and FMA, else 4 (SSE2). The
 /// lanes' partial sums add up in another order, so phi differs between the two in the last bits
-/// (well within the field tests' 1e-5 r); one machine always takes the same.
+/// (well within the field tests' 1e-5 r); one machine always takes the same. The CUDA gather
+/// makes the 8-lane sums (cuda/facade/FieldGather.h).
 int fieldLanes();
 
 /// Fill every active voxel of tree (voxel (i,j,k) at (i,j,k) * level.voxelSize) with phi (one
