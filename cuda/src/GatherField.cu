@@ -401,8 +401,9 @@ __global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
 }
 
 /// Scratch particles a batch of leaves may take at once (36 bytes each: gathered, its bucket,
-/// sorted); a leaf with more runs alone.
-constexpr unsigned long long kBatchParticles = 1ull << 22;
+/// sorted: 36 MiB); a leaf with more runs alone. 1M particles are some 6,000 leaves, enough
+/// blocks to fill the device.
+constexpr unsigned long long kBatchParticles = 1ull << 20;
 
 } // namespace
 
