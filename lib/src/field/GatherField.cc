@@ -33,6 +33,7 @@ constexpr float kFar = 1e30f;          // padding particle: s^2 = inf -> contrib
 constexpr int kPad = util::kWideLanes; // far particles after a row: enough for either lanes
 
 using LeafT = openvdb::FloatTree::LeafNodeType;
+static_assert(LeafT::DIM == GatherLayout::kLeafDim, "GatherLayout lays out OpenVDB's leaves");
 
 inline Lanes load(const float* p)
 {
