@@ -74,13 +74,32 @@ __device__ bool leafBox(const Params& p, size_t leaf, double o[3], double lo[3],
     return true;
 }
 
+/// The block's threads with `keep`, numbered in thread order from `kept` (shared), which then
+/// counts them too: where each writes, in order. All threads call it (it synchronises).
+__device__ uint32_t keptSlot(bool keep, int* warpFound, uint32_t& kept)
+{
+    const unsigned found = __ballot_sync(0xffffffffu, keep);
+    const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+    if (lane == 0) warpFound[warp] = __popc(found);
+    __syncthreads();
+    uint32_t at = kept + __popc(found & ((1u << lane) - 1u));
+    for (int w = 0; w < warp; ++w)
+        at += warpFound[w];
+    __syncthreads(); // (every thread has read `kept`)
+    if (threadIdx.x == 0)
+        for (int w = 0; w < kThreads / 32; ++w)
+            kept += warpFound[w];
+    __syncthreads();
+    return at;
+}
+
 /// Walks the occupied cells of the leaf's box in the CPU's order (z, then y, then x), a chunk of
 /// cells at a time, and calls visit(cellBegin, cellPrefix, cells) with the chunk's occupied cells
 /// compacted in that order (all threads, block-uniform).
 template <typename Visit>
 __device__ void forEachCellChunk(const Params& p, const double o[3], const double lo[3],
                                  const double hi[3], uint32_t* cellBegin, uint32_t* cellPrefix,
-                                 int* warpFound, int& cellsInChunk, Visit&& visit)
+                                 int* warpFound, uint32_t& cellsInChunk, Visit&& visit)
 {
     long long c0[3], c1[3];
     for (int a = 0; a < 3; ++a) {
@@ -98,24 +117,14 @@ __device__ void forEachCellChunk(const Params& p, const double o[3], const doubl
             if (c < boxCells)
                 at =
                     findCell(p.cells, c0[0] + c % nx, c0[1] + (c / nx) % ny, c0[2] + c / (nx * ny));
-            const unsigned found = __ballot_sync(0xffffffffu, at >= 0);
-            const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
-            if (lane == 0) warpFound[warp] = __popc(found);
-            __syncthreads();
-            int slot = cellsInChunk + __popc(found & ((1u << lane) - 1u));
-            for (int w = 0; w < warp; ++w)
-                slot += warpFound[w];
+            const uint32_t slot = keptSlot(at >= 0, warpFound, cellsInChunk);
             if (at >= 0) {
                 cellBegin[slot] = p.cells.starts[at];
                 cellPrefix[slot + 1] = p.cells.starts[at + 1] - p.cells.starts[at];
             }
-            __syncthreads();
-            if (threadIdx.x == 0)
-                for (int w = 0; w < kThreads / 32; ++w)
-                    cellsInChunk += warpFound[w];
-            __syncthreads();
         }
-        const int cells = cellsInChunk;
+        __syncthreads();
+        const int cells = int(cellsInChunk);
         if (threadIdx.x == 0) {
             cellPrefix[0] = 0;
             for (int i = 0; i < cells; ++i)
@@ -157,7 +166,7 @@ struct Shared
 {
     uint32_t cellBegin[kCellChunk], cellPrefix[kCellChunk + 1];
     int warpFound[kThreads / 32];
-    int cellsInChunk;
+    uint32_t cellsInChunk;
     uint32_t total; // particles gathered so far
     int activeCount;
     unsigned short active[512];
@@ -257,13 +266,7 @@ __global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
                                      i = particleAt(begin, prefix, cells, f);
                                      in = localOf(p, i, o, lo, hi, l);
                                  }
-                                 const unsigned found = __ballot_sync(0xffffffffu, in);
-                                 const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
-                                 if (lane == 0) sh.warpFound[warp] = __popc(found);
-                                 __syncthreads();
-                                 uint32_t at = sh.total + __popc(found & ((1u << lane) - 1u));
-                                 for (int w = 0; w < warp; ++w)
-                                     at += sh.warpFound[w];
+                                 const uint32_t at = keptSlot(in, sh.warpFound, sh.total);
                                  if (in) {
                                      const float lz = float(l[2]);
                                      const uint32_t bucket = uint32_t(
@@ -274,11 +277,6 @@ __global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
                                      bucketOf[at] = bucket;
                                      atomicAdd(&bucketEnd[bucket], 1u);
                                  }
-                                 __syncthreads();
-                                 if (threadIdx.x == 0)
-                                     for (int w = 0; w < kThreads / 32; ++w)
-                                         sh.total += sh.warpFound[w];
-                                 __syncthreads();
                              }
                          });
     __syncthreads();
