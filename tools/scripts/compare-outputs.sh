@@ -3,9 +3,9 @@
 # Proof that a restructuring changed no output: both binaries reconstruct every real frame of
 # SHARED_DATA/real and the generated scenes (default settings, and a few other field and mesher
 # settings), writing .vdb, .obj and .ply; every pair of files must be byte-identical. Runs on the
-# GPU machine too (no OpenVDB needed there), with --device cuda; --device cpu:cuda runs OLD on the
-# CPU and NEW on the GPU (one binary twice: the GPU makes the CPU's files). Prints one line per case and
-# 'compare: N passed, M failed'; exit 1 when any differ.
+# GPU machine too (no OpenVDB needed there), with --device cuda; --device cpu:cuda runs OLD on
+# the CPU and NEW on the GPU (one binary twice: the GPU makes the CPU's files). Prints one line
+# per case and 'compare: N passed, M failed'; exit 1 when any differ.
 set -uo pipefail
 OLD=$1 NEW=$2 SHARED=${3:-../shared/data}
 DEVICE=cpu

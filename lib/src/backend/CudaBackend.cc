@@ -267,10 +267,8 @@ public:
                                     });
         if (!mIndex) throw Error("CUDA backend: evaluate() before the particles were given");
         const neighbors::CellIndex& particles = *mIndex;
-        if (!cuda::gatherFits(level.voxelSize, params.influenceRadius)) { // (see narrowBand)
-            mCpuField = true;
-            return field::evaluateField(tree, particles, params, level, ctx);
-        }
+        mCpuField = !cuda::gatherFits(level.voxelSize, params.influenceRadius); // (narrowBand)
+        if (mCpuField) return field::evaluateField(tree, particles, params, level, ctx);
         cuda::GatherTimes times;
         const size_t evaluations =
             fillActiveVoxels(tree, [&](const int32_t* origins, const uint64_t* masks, size_t n) {
