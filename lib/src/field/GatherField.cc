@@ -6,6 +6,8 @@
 #include "field/GatherLayout.h"
 #include "util/Floor.h"
 #include "util/Lanes.h"
+#include "util/Memory.h"
+#include "util/Points4.h"
 #include "util/SetBits.h"
 
 #include <fluidsurf/Error.h>
@@ -45,14 +47,20 @@ inline Lanes load(const float* p)
 /// task.
 struct Scratch
 {
-    std::vector<float> x, y, z, r;      // gathered, in cell order
-    std::vector<uint32_t> key;          //   each one's z-slab * B + x-column
-    std::vector<uint16_t> columnY;      //   and y-column
-    std::vector<uint32_t> byY, count;   // the gathered in y-column order; a counting sort's
-    std::vector<float> sx, sy, sz, sr;  // sorted by (z-slab, x-column, y-column), kPad more
-    std::vector<uint32_t> sectionStart; //   where each z-slab's x-column starts (by key)
-    std::vector<float> rx, ry, rz, rr;  // one row, by z-slab, padded with kPad far particles
-    std::vector<uint32_t> rowSlabStart; //   where each z-slab starts
+    explicit Scratch(const neighbors::CellIndex& index) : cells(index) {}
+
+    /// The cells' look-ups: a task's leaves come in the tree's order, and neighbouring leaves
+    /// reach the same cells (through the hash table, a tenth of the gather's leaf work).
+    neighbors::NearbyCells cells;
+    std::vector<uint64_t> ranges;         // the box's cells' particles, end << 32 | begin
+    util::NoInitVector<float> x, y, z, r; // gathered, in cell order
+    util::NoInitVector<uint32_t> key;     //   each one's z-slab * B + x-column
+    util::NoInitVector<uint16_t> columnY; //   and y-column
+    std::vector<uint32_t> byY, count;     // the gathered in y-column order; a counting sort's
+    std::vector<float> sx, sy, sz, sr;    // sorted by (z-slab, x-column, y-column), kPad more
+    std::vector<uint32_t> sectionStart;   //   where each z-slab's x-column starts (by key)
+    std::vector<float> rx, ry, rz, rr;    // one row, by z-slab, padded with kPad far particles
+    std::vector<uint32_t> rowSlabStart;   //   where each z-slab starts
 };
 
 /// What a row picks from a leaf's sorted particles (sx, ...): in each slab z of [zlo, zhi), the
@@ -199,13 +207,130 @@ openvdb::CoordBBox activeBox(const LeafT& leaf)
     return openvdb::CoordBBox(o + openvdb::Coord(x0, y0, z0), o + openvdb::Coord(x1, y1, z1));
 }
 
+/// A leaf's gather box (GatherLayout::box): open, leaf-local, and the leaf's origin in world units.
+struct GatherBox
+{
+    double o[3], lo[3], hi[3];
+};
+
+/// Where the gather writes the particles it reads, each at the next place, which moves on past
+/// those in the box: room for all of them and 4 more (gatherWide stores 4 at a time).
+struct GatherOut
+{
+    float *x, *y, *z, *r;
+    uint32_t* key;     ///< z-slab * binCount + x-column
+    uint16_t* columnY; ///< y-column
+};
+
+/// Particle i into out at n; returns n, moved on by one where i lies in the box. No branch on
+/// that: the cells reach past the box, so whether a particle lies in it cannot be predicted.
+template <bool Radii>
+inline size_t gatherOne(const neighbors::CellIndex& particles, const GatherLayout& layout,
+                        const GatherBox& box, uint32_t i, const GatherOut& out, size_t n)
+{
+    const Vec3f& p = particles.positions[i];
+    const double lx = p.x - box.o[0], ly = p.y - box.o[1], lz = p.z - box.o[2];
+    const bool in = (lx > box.lo[0]) & (lx < box.hi[0]) & (ly > box.lo[1]) & (ly < box.hi[1]) &
+                    (lz > box.lo[2]) & (lz < box.hi[2]);
+    out.x[n] = float(lx), out.y[n] = float(ly), out.z[n] = float(lz);
+    if (Radii) out.r[n] = particles.radii[i];
+    out.key[n] = uint32_t(layout.slabOf(float(lz)) * layout.binCount() + layout.binOf(lx));
+    out.columnY[n] = uint16_t(layout.binOf(ly));
+    return n + in;
+}
+
+/// floor(v) on four lanes, as 32-bit integers (v well inside their range).
+__attribute__((target("avx2"), always_inline)) inline __m128i floorLanes(__m256d v)
+{
+    return _mm256_cvttpd_epi32(_mm256_round_pd(v, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC));
+}
+
+__attribute__((target("avx2"), always_inline)) inline __m128i clampLanes(__m128i v, __m128i lo,
+                                                                         __m128i hi)
+{
+    return _mm_min_epi32(_mm_max_epi32(v, lo), hi);
+}
+
+/// GatherLayout::binOf on four lanes: floor((local / dx + reach) / binSlabs), clamped.
+struct GatherWideAxis
+{
+    __m256d invDx, reach, invBinSlabs;
+    __m128i zero, top;
+
+    __attribute__((target("avx2"), always_inline)) __m128i of(__m256d local) const
+    {
+        return clampLanes(floorLanes(_mm256_mul_pd(
+                              _mm256_add_pd(_mm256_mul_pd(local, invDx), reach), invBinSlabs)),
+                          zero, top);
+    }
+};
+
+/// gatherOne for particles [i, i + 4 k) of [i, e), four at a time in AVX registers where the CPU
+/// has AVX2; returns where it stopped, and n moved on. The same double subtractions, tests,
+/// products and floors on each lane as gatherOne (no FMA in this target), GatherLayout's slabOf
+/// and binOf written out: floor by rounding, clamp in integers. The kept lanes are packed to
+/// the front of each register by one permute (util::kSetBits) and stored whole. One at a time,
+/// this loop was most of the gather's leaf work (the floors above all: 3 a particle).
+template <bool Radii>
+__attribute__((target("avx2"))) uint32_t
+gatherWide(const neighbors::CellIndex& particles, const GatherLayout& layout, const GatherBox& box,
+           uint32_t i, uint32_t e, const GatherOut& out, size_t& n)
+{
+    __m256d o[3], lo[3], hi[3];
+    for (int a = 0; a < 3; ++a)
+        o[a] = _mm256_set1_pd(box.o[a]), lo[a] = _mm256_set1_pd(box.lo[a]),
+        hi[a] = _mm256_set1_pd(box.hi[a]);
+    const __m256d invDx = _mm256_set1_pd(layout.invDx), reach = _mm256_set1_pd(layout.reach),
+                  invBinSlabs = _mm256_set1_pd(layout.invBinSlabs);
+    const __m128i zero = _mm_setzero_si128(), slabTop = _mm_set1_epi32(layout.slabCount() - 1),
+                  binTop = _mm_set1_epi32(layout.binCount() - 1),
+                  slabReach = _mm_set1_epi32(layout.reach),
+                  bins = _mm_set1_epi32(layout.binCount());
+    // (helpers of this target: a lambda here would be compiled without AVX)
+    const GatherWideAxis bin{invDx, reach, invBinSlabs, zero, binTop};
+    for (; i + 4 <= e; i += 4) {
+        __m128 ps[3];
+        util::splitPoints4(&particles.positions[i], ps[0], ps[1], ps[2]);
+        __m256d l[3];
+        __m256d in = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+        for (int a = 0; a < 3; ++a) {
+            l[a] = _mm256_sub_pd(_mm256_cvtps_pd(ps[a]), o[a]);
+            in = _mm256_and_pd(in, _mm256_and_pd(_mm256_cmp_pd(l[a], lo[a], _CMP_GT_OQ),
+                                                 _mm256_cmp_pd(l[a], hi[a], _CMP_LT_OQ)));
+        }
+        const __m128 fx = _mm256_cvtpd_ps(l[0]), fy = _mm256_cvtpd_ps(l[1]),
+                     fz = _mm256_cvtpd_ps(l[2]);
+        // slabOf(float(lz)): floor(local / dx) + reach, clamped
+        const __m128i slab = clampLanes(
+            _mm_add_epi32(floorLanes(_mm256_mul_pd(_mm256_cvtps_pd(fz), invDx)), slabReach), zero,
+            slabTop);
+        const __m128i key = _mm_add_epi32(_mm_mullo_epi32(slab, bins), bin.of(l[0]));
+        const __m128i columnY = bin.of(l[1]);
+        const unsigned mask = unsigned(_mm256_movemask_pd(in));
+        __m128i order;
+        std::memcpy(&order, util::kSetBits.positions[mask], sizeof order);
+        _mm_storeu_ps(&out.x[n], _mm_permutevar_ps(fx, order));
+        _mm_storeu_ps(&out.y[n], _mm_permutevar_ps(fy, order));
+        _mm_storeu_ps(&out.z[n], _mm_permutevar_ps(fz, order));
+        if (Radii)
+            _mm_storeu_ps(&out.r[n], _mm_permutevar_ps(_mm_loadu_ps(&particles.radii[i]), order));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(&out.key[n]),
+                         _mm_castps_si128(_mm_permutevar_ps(_mm_castsi128_ps(key), order)));
+        const __m128i y = _mm_castps_si128(_mm_permutevar_ps(_mm_castsi128_ps(columnY), order));
+        _mm_storel_epi64(reinterpret_cast<__m128i*>(&out.columnY[n]), _mm_packus_epi32(y, y));
+        n += util::kSetBits.count[mask];
+    }
+    return i;
+}
+
 struct Kernel
 {
     const neighbors::CellIndex& particles;
     FieldConstants constants;
     GatherLayout layout;
     bool radii;
-    int lanes; // of the sums: util::kLanes or util::kWideLanes (fieldLanes())
+    int lanes;       // of the sums: util::kLanes or util::kWideLanes (fieldLanes())
+    bool wideGather; // gatherWide (AVX2), or gatherOne alone: the same particles either way
     double dx = layout.dx, R = layout.R;
     int reach = layout.reach, window = layout.window;
 
@@ -232,29 +357,33 @@ struct Kernel
         layout.box(first, last, lo, hi);
         for (int a = 0; a < 3; ++a)
             cellLo[a] = o[a] + lo[a], cellHi[a] = o[a] + hi[a];
-        s.x.clear(), s.y.clear(), s.z.clear(), s.r.clear(), s.key.clear(), s.columnY.clear();
         const int B = binCount();
-        particles.forEachCellInBox(cellLo, cellHi, [&](uint32_t b, uint32_t e) {
-            for (uint32_t i = b; i < e; ++i) {
-                const Vec3f& p = particles.positions[i];
-                const double lx = p.x - o[0], ly = p.y - o[1], lz = p.z - o[2];
-                if (!(lx > lo[0] && lx < hi[0] && ly > lo[1] && ly < hi[1] && lz > lo[2] &&
-                      lz < hi[2]))
-                    continue;
-                s.x.push_back(float(lx));
-                s.y.push_back(float(ly));
-                s.z.push_back(float(lz));
-                if (radii) s.r.push_back(particles.radii[i]);
-                s.key.push_back(uint32_t(slabOf(float(lz)) * B + binOf(lx)));
-                s.columnY.push_back(uint16_t(binOf(ly)));
-            }
+        s.ranges.clear();
+        size_t m = 0;
+        s.cells.forEachCellInBox(cellLo, cellHi, [&](uint32_t b, uint32_t e) {
+            s.ranges.push_back(uint64_t(e) << 32 | b);
+            m += e - b;
         });
-        // Sorted by (z-slab, x-column, y-column), and within that in cell order: two stable
-        // counting sorts, by the y-column and then by slab and x-column. A row then reads, for
-        // each slab, one run of x-columns, and the particles it picks come out by z-slab without
-        // a sort of their own (sorting each row's picks by slab was most of the field stage's
-        // selection on thin bands: 3.4 active voxels a row on the 13.1M drop).
-        const size_t n = s.x.size();
+        constexpr size_t kRoom = 4; // (gatherWide's stores)
+        s.x.resize(m + kRoom), s.y.resize(m + kRoom), s.z.resize(m + kRoom);
+        s.r.resize(radii ? m + kRoom : 0);
+        s.key.resize(m + kRoom), s.columnY.resize(m + kRoom);
+        const GatherBox box{{o[0], o[1], o[2]}, {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+        const GatherOut out{s.x.data(), s.y.data(),   s.z.data(),
+                            s.r.data(), s.key.data(), s.columnY.data()};
+        size_t n = 0;
+        for (const uint64_t range : s.ranges) {
+            uint32_t i = uint32_t(range);
+            const uint32_t e = uint32_t(range >> 32);
+            if (wideGather)
+                i = radii ? gatherWide<true>(particles, layout, box, i, e, out, n)
+                          : gatherWide<false>(particles, layout, box, i, e, out, n);
+            for (; i < e; ++i)
+                n = radii ? gatherOne<true>(particles, layout, box, i, out, n)
+                          : gatherOne<false>(particles, layout, box, i, out, n);
+        }
+        s.x.resize(n), s.y.resize(n), s.z.resize(n), s.r.resize(radii ? n : 0);
+        s.key.resize(n), s.columnY.resize(n);
         s.count.assign(size_t(B) + 1, 0);
         for (uint16_t c : s.columnY)
             ++s.count[c + 1];
@@ -408,19 +537,33 @@ int fieldLanes()
 size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
                      const Params& params, const Level& level, Context& ctx, int lanes)
 {
+    return detail::evaluateField(tree, particles, params, level, ctx, lanes,
+                                 util::doubleRegisterLanes() == 4);
+}
+
+size_t detail::evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
+                             const Params& params, const Level& level, Context& ctx, int lanes,
+                             bool wideGather)
+{
     if (lanes != util::kLanes && lanes != util::kWideLanes)
         throw ValueError("evaluateField: lanes must be 4 or 8");
     if (lanes == util::kWideLanes && fieldLanes() != lanes)
         throw ValueError("evaluateField: 8 lanes need a CPU with AVX2 and FMA");
+    if (wideGather && util::doubleRegisterLanes() != 4)
+        throw ValueError("evaluateField: the wide gather needs a CPU with AVX2");
     const bool radii = !particles.radii.empty();
-    Kernel kernel{particles, fieldConstants(params, level, radii),
-                  GatherLayout::of(level.voxelSize, params.influenceRadius), radii, lanes};
+    Kernel kernel{particles,
+                  fieldConstants(params, level, radii),
+                  GatherLayout::of(level.voxelSize, params.influenceRadius),
+                  radii,
+                  lanes,
+                  wideGather};
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
     std::atomic<size_t> evaluations{0};
     tbb::parallel_for(leaves.leafRange(1),
                       [&](const openvdb::tree::LeafManager<openvdb::FloatTree>::LeafRange& range) {
                           ctx.checkpoint();
-                          Scratch scratch;
+                          Scratch scratch(particles);
                           size_t n = 0;
                           for (auto leaf = range.begin(); leaf; ++leaf)
                               n += kernel.leaf(*leaf, scratch);

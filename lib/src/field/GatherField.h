@@ -41,6 +41,13 @@ size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& parti
                      int lanes = fieldLanes());
 
 namespace detail {
+/// evaluateField with the gather's particles read four at a time in AVX registers (wideGather,
+/// the default where the CPU has AVX2) or one at a time: the same particles in the same order,
+/// so the same bits (tests run both). ValueError for wideGather without AVX2.
+size_t evaluateField(openvdb::FloatTree& tree, const neighbors::CellIndex& particles,
+                     const Params& params, const Level& level, Context& ctx, int lanes,
+                     bool wideGather);
+
 /// One voxel's sums as the 8-lane gather makes them (for tests): candidates [b, e) of X, Y, Z
 /// (and radii R, or null) in leaf-local coordinates, candidate j on lane (j - b) % 8, the voxel
 /// at (vx, vy, vz); the arrays readable up to b + 8 ceil((e - b) / 8), lanes past e padded with

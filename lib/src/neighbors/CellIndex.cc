@@ -4,6 +4,7 @@
 #include "util/Floor.h"
 #include "util/MarkedNumbers.h"
 #include "util/Memory.h"
+#include "util/Points4.h"
 #include "util/RadixSort.h"
 
 #include <fluidsurf/Error.h>
@@ -76,26 +77,14 @@ template <typename Key>
 __attribute__((target("avx2"))) void cellKeysWide(const CellIndex& index, const Vec3f* positions,
                                                   size_t begin, size_t end, Handle<Key>* handles)
 {
-    static_assert(sizeof(Vec3f) == 3 * sizeof(float));
     __m256d origin[3], top[3];
     for (int a = 0; a < 3; ++a)
         origin[a] = _mm256_set1_pd(index.origin[a]), top[a] = _mm256_set1_pd(index.dims[a] - 1.0);
     const __m256d size = _mm256_set1_pd(index.cellSize), zero = _mm256_setzero_pd();
     size_t i = begin;
     for (; i + 4 <= end; i += 4) {
-        // x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3: each axis' first two from a and b, its
-        // last two from b and c, then the four put together
-        const float* f = reinterpret_cast<const float*>(&positions[i]);
-        const __m128 a = _mm_loadu_ps(f), b = _mm_loadu_ps(f + 4), c = _mm_loadu_ps(f + 8);
-        const __m128 xs =
-            _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 2, 3, 0)),
-                           _mm_shuffle_ps(b, c, _MM_SHUFFLE(1, 1, 2, 2)), _MM_SHUFFLE(2, 0, 1, 0));
-        const __m128 ys =
-            _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 0, 0, 1)),
-                           _mm_shuffle_ps(b, c, _MM_SHUFFLE(2, 2, 3, 3)), _MM_SHUFFLE(2, 0, 2, 0));
-        const __m128 zs =
-            _mm_shuffle_ps(_mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 1, 2, 2)),
-                           _mm_shuffle_ps(c, c, _MM_SHUFFLE(3, 3, 0, 0)), _MM_SHUFFLE(2, 0, 2, 0));
+        __m128 xs, ys, zs;
+        util::splitPoints4(&positions[i], xs, ys, zs);
         __m256i key = _mm256_setzero_si256();
         const __m128 axes[3] = {xs, ys, zs};
         for (int k = 0; k < 3; ++k) {

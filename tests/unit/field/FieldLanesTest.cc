@@ -11,6 +11,7 @@
 #include "field/FieldValueWide.h"
 #include "field/GatherField.h"
 #include "unit/field/BruteForce.h"
+#include "util/Lanes.h"
 
 #include <fluidsurf/Scenes.h>
 
@@ -256,6 +257,70 @@ TEST(GatherField, AVoxelsValueDoesNotDependOnTheOtherActiveVoxelsOfItsLeaf)
             EXPECT_GE(compared, 10u) << voxel; // (20 at 4 r, hundreds at the others)
         }
     }
+}
+
+// The gather reads its particles four at a time with AVX2 (GatherField.cc's gatherWide, the
+// floors, clamps and box test written out on lanes) or one at a time: the same particles in the
+// same order, so every voxel's value must have the same bits. A drop, and a lattice whose
+// coordinates are whole and half voxels (on the slabs' and the columns' edges, where a floor
+// taken another way would land one lower), with and without per-particle radii, at voxels of
+// r / 2, r and 4 r, every voxel of the band's leaves active and a few a leaf (other boxes).
+TEST(GatherField, TheWideGatherReadsTheSameParticlesAsOneAtATime)
+{
+    if (util::doubleRegisterLanes() != 4) GTEST_SKIP() << "no AVX2: one way only";
+    SceneParams sp;
+    sp.count = 2000;
+    ParticleSet drop = generateScene(Scene::Drop, sp);
+    ParticleSet lattice;
+    for (int i = 0; i < 14; ++i)
+        for (int j = 0; j < 14; ++j)
+            for (int k = 0; k < 14; ++k)
+                lattice.positions.push_back(
+                    Vec3f(float(i * sp.radius), float(j * sp.radius), float(k * sp.radius)));
+    size_t compared = 0;
+    for (const ParticleSet* ps : {&drop, &lattice})
+        for (bool withRadii : {false, true})
+            for (double voxel : {0.5, 1.0, 4.0}) {
+                Params p = Params::fromRadius(sp.radius);
+                p.voxelSize = voxel * sp.radius;
+                std::vector<float> radii;
+                if (withRadii)
+                    for (size_t i = 0; i < ps->size(); ++i)
+                        radii.push_back(float(sp.radius * (0.8 + 0.4 * double(i % 11) / 10)));
+                Context ctx;
+                const neighbors::CellIndex index = neighbors::buildCellIndex(
+                    ps->positions.data(), withRadii ? radii.data() : nullptr, ps->size(),
+                    p.influenceRadius, ctx);
+                std::vector<int> lanes{4};
+                if (field::fieldLanes() == 8) lanes.push_back(8);
+                for (int l : lanes)
+                    for (bool wholeLeaves : {true, false}) {
+                        openvdb::FloatTree band = bandAround(*ps, p.voxelSize, p.radius);
+                        openvdb::FloatTree tree(band.background());
+                        size_t k = 0;
+                        for (auto leaf = band.cbeginLeaf(); leaf; ++leaf, ++k)
+                            for (auto v = leaf->cbeginValueOn(); v; ++v)
+                                if (wholeLeaves || (v.pos() + k) % 61 == 0)
+                                    tree.setValueOn(v.getCoord());
+                        if (wholeLeaves)
+                            for (auto leaf = tree.beginLeaf(); leaf; ++leaf)
+                                leaf->setValuesOn();
+                        openvdb::FloatTree wide = tree, narrow = tree;
+                        field::detail::evaluateField(wide, index, p, p.level(), ctx, l, true);
+                        field::detail::evaluateField(narrow, index, p, p.level(), ctx, l, false);
+                        size_t differ = 0;
+                        for (auto it = wide.cbeginValueOn(); it; ++it, ++compared) {
+                            const float a = *it, b = narrow.getValue(it.getCoord());
+                            if (std::memcmp(&a, &b, sizeof a) != 0 && differ++ < 5)
+                                ADD_FAILURE()
+                                    << (ps == &drop ? "drop" : "lattice")
+                                    << (withRadii ? ", radii" : "") << ", voxel " << voxel << " r, "
+                                    << l << " lanes: " << it.getCoord() << " " << a << " != " << b;
+                        }
+                        EXPECT_EQ(differ, 0u);
+                    }
+            }
+    EXPECT_GT(compared, 100000u);
 }
 
 TEST(GatherField, LanesOtherThanFourOrWhatTheCpuHasAreRefused)
