@@ -146,12 +146,10 @@ LeafBits faceBits(const LeafT& leaf, int axis, int step)
         if (axis == 1) face = uint64_t(0xff) << (8 * at);
         if (axis == 2) face = uint64_t(0x0101010101010101ull) << at;
         b.active[x] = leaf.getValueMask().template getWord<uint64_t>(x) & face;
-        uint64_t neg = 0;
-        for (uint64_t bits = face; bits; bits &= bits - 1) {
-            const int i = __builtin_ctzll(bits);
-            neg |= uint64_t(v[64 * x + i] < 0) << i;
-        }
-        b.negative[x] = neg;
+        // the whole word's signs, 4 at a time, then the face's (a value at a time, a chain of
+        // bit scans and shifts through the face's 64 voxels, this was more than half of the
+        // frontier candidates' time)
+        b.negative[x] = util::LeafWords::inWord(v + 64 * x) & face;
     }
     return b;
 }

@@ -25,8 +25,13 @@ struct LeafWords
             active[x] = mask.template getWord<uint64_t>(x), in[x] = 0;
         const float* v = leaf.buffer().data();
         for (int x = 0; x < 8; ++x)
-            in[x] =
-                wordWhere(v + 64 * x, [](__m128 f) { return _mm_cmplt_ps(f, _mm_setzero_ps()); });
+            in[x] = inWord(v + 64 * x);
+    }
+
+    /// The bits of 64 values v[i] < 0 (inside), bit i for v[i].
+    static uint64_t inWord(const float* v)
+    {
+        return wordWhere(v, [](__m128 f) { return _mm_cmplt_ps(f, _mm_setzero_ps()); });
     }
 
     /// The bits of 64 values v[i] where test (4 at a time: an SSE2 compare) holds, bit i for
