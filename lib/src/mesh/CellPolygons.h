@@ -213,10 +213,14 @@ namespace detail {
 /// stage took 0.256 -> 0.213 s on 2 cores.
 struct CellCases
 {
+    static constexpr int kMaxFan = 4; ///< (a larger fan would fail this table's compilation)
     CellPolygons polygons[256];
     bool fourCrossings[256] = {};
     /// The triangles of the polygons fanned (a polygon of n edges: n - 2).
     int triangles[256] = {};
+    /// Those triangles as cell edges, in the order the mesher writes them: polygon by polygon
+    /// (forEach's order), each fanned from its first edge.
+    signed char fan[256][kMaxFan][3] = {};
     constexpr CellCases() : polygons{}
     {
         for (int pattern = 0; pattern < 256; ++pattern) {
@@ -230,7 +234,14 @@ struct CellCases
             if (fourCrossings[pattern]) continue;
             polygons[pattern] = CellPolygons(pattern);
             int& fanned = triangles[pattern];
-            polygons[pattern].forEach([&fanned](const int*, int n) { fanned += n - 2; });
+            auto& out = fan[pattern];
+            polygons[pattern].forEach([&fanned, &out](const int* edges, int n) {
+                for (int k = 1; k + 1 < n; ++k, ++fanned) {
+                    out[fanned][0] = static_cast<signed char>(edges[0]);
+                    out[fanned][1] = static_cast<signed char>(edges[k]);
+                    out[fanned][2] = static_cast<signed char>(edges[k + 1]);
+                }
+            });
         }
     }
 };
@@ -244,6 +255,23 @@ inline int cellTriangles(const float c[8])
 {
     const int pattern = cellSignPattern(c);
     return detail::kCellCases.fourCrossings[pattern] ? -1 : detail::kCellCases.triangles[pattern];
+}
+
+/// A cell whose faces have at most two crossings each: its polygons (the table's), and their
+/// triangles as cell edges (fanned as the mesher writes them); null for a cell with four
+/// crossings on a face (cut it: CellPolygons). Host only.
+struct CellFan
+{
+    const CellPolygons* polygons = nullptr;
+    const signed char (*triangles)[3] = nullptr;
+    int count = 0;
+};
+inline CellFan cellFan(const float c[8])
+{
+    const int pattern = cellSignPattern(c);
+    if (detail::kCellCases.fourCrossings[pattern]) return {};
+    return {&detail::kCellCases.polygons[pattern], detail::kCellCases.fan[pattern],
+            detail::kCellCases.triangles[pattern]};
 }
 
 FLUIDSURF_HD inline CellPolygons::CellPolygons(const float c[8])

@@ -395,6 +395,16 @@ struct Passes
         return s;
     }
 
+    /// The vertex on cell edge e of the cell at origin (its crossing edges start in its leaf or
+    /// in a leaf of idx).
+    static uint32_t edgeVertex(const Coord& origin, const VertexStar& idx, int e)
+    {
+        Coord g = origin;
+        for (int a = 0; a < 3; ++a)
+            g[a] += kCorner[kEdges.lowCorner[e]][a];
+        return idx.vertex(g - idx.origin, kEdges.axis[e]);
+    }
+
     // The polygons of one cell (CellPolygons.h). A polygon is fanned from its first vertex,
     // except in a cell with an ambiguous face, where it gets a centre vertex instead. The
     // cell's crossing edges start in its leaf or in a leaf of idx (both ends are active).
@@ -404,19 +414,23 @@ struct Passes
     {
         if constexpr (!Sink::kWrites) { // counting: the signs alone, as a rule
             if (const int n = cellTriangles(c); n >= 0) return out.add(size_t(n));
+        } else if (const CellFan fan = cellFan(c); fan.polygons) {
+            // the signs decide: the table's triangles, without walking the polygons
+            uint32_t vertex[12];
+            for (int e = 0; e < 12; ++e)
+                if (fan.polygons->next[e] >= 0) vertex[e] = edgeVertex(origin, idx, e);
+            for (int t = 0; t < fan.count; ++t)
+                out.triangle(vertex[fan.triangles[t][0]], vertex[fan.triangles[t][1]],
+                             vertex[fan.triangles[t][2]]);
+            return;
         }
         const CellPolygons polygons(c);
         const int* next = polygons.next;
         const bool ambiguous = polygons.ambiguous;
         uint32_t vertex[12] = {};
         if constexpr (Sink::kWrites)
-            for (int e = 0; e < 12; ++e) {
-                if (next[e] < 0) continue;
-                Coord g = origin;
-                for (int a = 0; a < 3; ++a)
-                    g[a] += kCorner[kEdges.lowCorner[e]][a];
-                vertex[e] = idx.vertex(g - idx.origin, kEdges.axis[e]);
-            }
+            for (int e = 0; e < 12; ++e)
+                if (next[e] >= 0) vertex[e] = edgeVertex(origin, idx, e);
         polygons.forEach([&](const int* polygon, int n) {
             if (!ambiguous || n == 3) {
                 for (int k = 1; k + 1 < n; ++k)

@@ -1,12 +1,14 @@
 // CellPolygonsTest.cc - a cell's polygons looked up by its corners' signs (the host's table) are
 // those cut from its values, for every sign pattern and random values, and so are the counting
-// pass' triangles; and, independently of both, every crossing edge lies on one polygon, each
-// step along a face of both its edges.
+// pass' triangles and the writing pass' fans; and, independently of both, every crossing edge lies
+// on one polygon, each step along a face of both its edges.
 #include "mesh/CellPolygons.h"
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <random>
+#include <vector>
 
 using namespace fluidsurf::mesh;
 
@@ -39,8 +41,23 @@ TEST(CellPolygons, LookedUpAsCutForEverySignPattern)
             ASSERT_EQ(looked.ambiguous, cut.ambiguous) << pattern;
             // the counting pass' triangles: the cut polygons fanned, n - 2 each
             int fanned = 0;
-            cut.forEach([&](const int*, int n) { fanned += n - 2; });
+            std::vector<std::array<int, 3>> fan; // the cut polygons fanned from their first edge
+            cut.forEach([&](const int* edges, int n) {
+                fanned += n - 2;
+                for (int k = 1; k + 1 < n; ++k)
+                    fan.push_back({edges[0], edges[k], edges[k + 1]});
+            });
             ASSERT_EQ(cellTriangles(c), cut.ambiguous ? -1 : fanned) << pattern;
+            // the writing pass' triangles: the same edges in the same order
+            const CellFan table = cellFan(c);
+            ASSERT_EQ(table.polygons != nullptr, !cut.ambiguous) << pattern;
+            if (table.polygons) {
+                ASSERT_EQ(table.count, int(fan.size())) << pattern;
+                for (int t = 0; t < table.count; ++t)
+                    for (int k = 0; k < 3; ++k)
+                        ASSERT_EQ(table.triangles[t][k], fan[size_t(t)][size_t(k)])
+                            << pattern << " triangle " << t;
+            }
             int before[12] = {}; // each crossing edge follows one other: closed polygons
             for (int e = 0; e < 12; ++e)
                 if (looked.next[e] >= 0) ++before[looked.next[e]];
