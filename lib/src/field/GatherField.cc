@@ -384,6 +384,11 @@ struct Kernel
         }
         s.x.resize(n), s.y.resize(n), s.z.resize(n), s.r.resize(radii ? n : 0);
         s.key.resize(n), s.columnY.resize(n);
+        // Sorted by (z-slab, x-column, y-column), and within that in cell order: two stable
+        // counting sorts, by the y-column and then by slab and x-column. A row then reads, for
+        // each slab, one run of x-columns, and the particles it picks come out by z-slab without
+        // a sort of their own (sorting each row's picks by slab was most of the field stage's
+        // selection on thin bands: 3.4 active voxels a row on the 13.1M drop).
         s.count.assign(size_t(B) + 1, 0);
         for (uint16_t c : s.columnY)
             ++s.count[c + 1];
