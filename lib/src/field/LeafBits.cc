@@ -146,10 +146,26 @@ LeafBits faceBits(const LeafT& leaf, int axis, int step)
         if (axis == 1) face = uint64_t(0xff) << (8 * at);
         if (axis == 2) face = uint64_t(0x0101010101010101ull) << at;
         b.active[x] = leaf.getValueMask().template getWord<uint64_t>(x) & face;
-        // the whole word's signs, 4 at a time, then the face's (a value at a time, a chain of
-        // bit scans and shifts through the face's 64 voxels, this was more than half of the
-        // frontier candidates' time)
-        b.negative[x] = util::LeafWords::inWord(v + 64 * x) & face;
+        // The face's signs (the same v < 0 as a voxel at a time, where a chain of bit scans
+        // and shifts through the face's 64 voxels was more than half of the frontier
+        // candidates' time): an x face is a whole word, 4 at a time; a y face is 8 values in a
+        // row of each word, 4 at a time; a z face is one value in 8 of each word, each on its
+        // own, no chain.
+        const float* w = v + 64 * x;
+        if (axis == 0) {
+            b.negative[x] = util::LeafWords::inWord(w);
+        } else if (axis == 1) {
+            const __m128 zero = _mm_setzero_ps();
+            const unsigned row =
+                unsigned(_mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(w + 8 * at), zero))) |
+                unsigned(_mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(w + 8 * at + 4), zero))) << 4;
+            b.negative[x] = uint64_t(row) << (8 * at);
+        } else {
+            uint64_t neg = 0;
+            for (int y = 0; y < 8; ++y)
+                neg |= uint64_t(w[8 * y + at] < 0) << (8 * y + at);
+            b.negative[x] = neg;
+        }
     }
     return b;
 }
