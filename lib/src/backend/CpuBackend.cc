@@ -5,6 +5,7 @@
 #include "field/GatherField.h"
 #include "mesh/MarchingCubes.h"
 #include "narrowband/NarrowBand.h"
+#include "util/MarkedNumbers.h"
 
 #include <algorithm>
 
@@ -27,10 +28,16 @@ Classified classifyOnCpu(const Particles& particles, const Params& params, Conte
     out.interior = c.classes.interior, out.surface = c.classes.surface;
     out.splash = c.classes.splash, out.isolated = c.classes.isolated;
     out.isolatedParticles.clear();
-    if (!params.keepIsolated)
-        for (size_t i = 0; i < c.classes.classes.size(); ++i)
-            if (c.classes.classes[i] == classify::Isolated)
-                out.isolatedParticles.push_back(c.index.order[i]);
+    if (!params.keepIsolated && c.classes.isolated > 0) {
+        // found on all threads (a loop over the 13.1M drop's classes took 12 ms on one)
+        const auto& classes = c.classes.classes;
+        const util::MarkedNumbers isolated(
+            classes.size(), [&](size_t i) { return classes[i] == classify::Isolated; });
+        out.isolatedParticles.resize(isolated.count());
+        isolated.forEach([&](size_t i, bool marked, size_t k) {
+            if (marked) out.isolatedParticles[k - 1] = c.index.order[i];
+        });
+    }
     std::sort(out.isolatedParticles.begin(), out.isolatedParticles.end());
     return c;
 }

@@ -12,8 +12,10 @@
 #include <fluidsurf/Error.h>
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <utility>
@@ -521,24 +523,34 @@ Classification classifyParticles(const neighbors::CellIndex& index, const Params
                           ctx.checkpoint();
                           cellsOf(work, cells.begin(), cells.end());
                       });
-    for (uint8_t c : out.classes) {
-        if (c == Interior)
-            ++out.interior;
-        else if (c == Surface)
-            ++out.surface;
-        else if (c == Splash)
-            ++out.splash;
-        else
-            ++out.isolated;
-    }
+    // The classes counted on all threads: on one, the 13.1M drop's took 25 ms of a 16-thread
+    // run (an H100 host), the others idle.
+    using Counts = std::array<size_t, 4>; // by ParticleClass
+    const Counts counts = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, n, size_t(1) << 16), Counts{},
+        [&](const tbb::blocked_range<size_t>& r, Counts sum) {
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                ++sum[out.classes[i] & 3];
+            return sum;
+        },
+        [](Counts a, const Counts& b) {
+            for (size_t k = 0; k < a.size(); ++k)
+                a[k] += b[k];
+            return a;
+        });
+    out.interior = counts[Interior], out.surface = counts[Surface];
+    out.splash = counts[Splash], out.isolated = counts[Isolated];
     return out;
 }
 
 std::vector<uint8_t> notIsolated(const Classification& c)
 {
     std::vector<uint8_t> keep(c.classes.size());
-    for (size_t i = 0; i < keep.size(); ++i)
-        keep[i] = c.classes[i] != Isolated;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, keep.size(), size_t(1) << 16),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i)
+                              keep[i] = c.classes[i] != Isolated;
+                      });
     return keep;
 }
 

