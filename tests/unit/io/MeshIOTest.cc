@@ -154,3 +154,107 @@ TEST(MeshIO, VertexAttributesAsPlyPropertiesAndVtkFieldArrays)
     EXPECT_FALSE(fileExists(dir.path("t.obj")) || fileExists(dir.path("big.ply")) ||
                  fileExists(dir.path("short.ply")));
 }
+
+namespace {
+
+/// The legacy VTK file's bytes, read as the format says, apart from the writer: each section's
+/// header line, then its big-endian 32-bit values.
+class VtkBytes
+{
+public:
+    explicit VtkBytes(std::string bytes) : mS(std::move(bytes)) {}
+    /// The next line, without its '\n'.
+    std::string line()
+    {
+        const size_t end = mS.find('\n', mAt);
+        EXPECT_NE(end, std::string::npos);
+        std::string l = mS.substr(mAt, end - mAt);
+        mAt = end + 1;
+        return l;
+    }
+    uint32_t value()
+    {
+        EXPECT_LE(mAt + 4, mS.size());
+        const auto* b = reinterpret_cast<const unsigned char*>(mS.data() + mAt);
+        mAt += 4;
+        return uint32_t(b[0]) << 24 | uint32_t(b[1]) << 16 | uint32_t(b[2]) << 8 | uint32_t(b[3]);
+    }
+    float real()
+    {
+        const uint32_t b = value();
+        float f;
+        std::memcpy(&f, &b, 4);
+        return f;
+    }
+    bool atEnd() const { return mAt == mS.size(); }
+
+private:
+    std::string mS;
+    size_t mAt = 0;
+};
+
+} // namespace
+
+TEST(MeshIO, VtkValuesBigEndianAcrossTheWritersBlocks)
+{
+    // more items than one block of the parallel writer (32 chunks of 8,192), a last block cut
+    // short; with and without normals, with and without attributes
+    TriangleMesh m;
+    const uint32_t np = 300007, nt = 600011;
+    for (uint32_t i = 0; i < np; ++i)
+        m.points.push_back({float(i) * 0.5f, -float(i) / 7.f, 1e-20f * float(i + 1)});
+    for (uint32_t i = 0; i < nt; ++i)
+        m.triangles.push_back({i % np, (i * 7 + 1) % np, (np - 1 - i % np)});
+    std::vector<Attribute> attributes(2);
+    attributes[0].name = "v", attributes[0].components = 3;
+    for (uint32_t i = 0; i < 3 * np; ++i)
+        attributes[0].floats.push_back(float(i) - 1e6f);
+    attributes[1].name = "id", attributes[1].type = AttributeType::Int;
+    for (uint32_t i = 0; i < np; ++i)
+        attributes[1].ints.push_back(int64_t(i) * 7919 - 1000000000);
+    TempDir dir;
+    for (int variant = 0; variant < 4; ++variant) {
+        SCOPED_TRACE(variant);
+        if (variant == 2) // normals from here on
+            for (uint32_t i = 0; i < np; ++i)
+                m.normals.push_back({0.f, float(i), -float(i)});
+        const bool withAttributes = variant % 2 == 1;
+        const std::vector<Attribute> with = withAttributes ? attributes : std::vector<Attribute>();
+        io::writeMesh(m, dir.path("m.vtk"), with);
+        VtkBytes in(readFileBytes(dir.path("m.vtk")));
+        EXPECT_EQ(in.line(), "# vtk DataFile Version 4.2");
+        EXPECT_EQ(in.line(), "fluidsurf mesh");
+        EXPECT_EQ(in.line(), "BINARY");
+        EXPECT_EQ(in.line(), "DATASET POLYDATA");
+        EXPECT_EQ(in.line(), "POINTS 300007 float");
+        size_t bad = 0;
+        for (const Vec3f& p : m.points)
+            bad += in.real() != p.x || in.real() != p.y || in.real() != p.z;
+        EXPECT_EQ(in.line(), "");
+        EXPECT_EQ(in.line(), "POLYGONS 600011 2400044");
+        for (const auto& t : m.triangles)
+            bad +=
+                in.value() != 3 || in.value() != t[0] || in.value() != t[1] || in.value() != t[2];
+        EXPECT_EQ(in.line(), "");
+        if (variant > 0) EXPECT_EQ(in.line(), "POINT_DATA 300007");
+        if (!m.normals.empty()) {
+            EXPECT_EQ(in.line(), "NORMALS normals float");
+            for (const Vec3f& n : m.normals)
+                bad += in.real() != n.x || in.real() != n.y || in.real() != n.z;
+            EXPECT_EQ(in.line(), "");
+        }
+        if (withAttributes) {
+            EXPECT_EQ(in.line(), "FIELD FieldData 2");
+            EXPECT_EQ(in.line(), "v 3 300007 float");
+            for (float f : attributes[0].floats)
+                bad += in.real() != f;
+            EXPECT_EQ(in.line(), "");
+            EXPECT_EQ(in.line(), "id 1 300007 int");
+            for (int64_t k : attributes[1].ints)
+                bad += int32_t(in.value()) != k;
+            EXPECT_EQ(in.line(), "");
+        }
+        EXPECT_EQ(bad, 0u);
+        EXPECT_TRUE(in.atEnd());
+    }
+}
