@@ -11,6 +11,12 @@
 #include "io/PlyHeader.h"
 #include "io/TextParse.h"
 
+#include "util/Memory.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 namespace fluidsurf {
 namespace io {
 
@@ -67,6 +73,87 @@ TriangleMesh readObj(const uint8_t* data, size_t size, const std::string& path)
     return m;
 }
 
+/// item(p, i) for each of count items of `stride` bytes from p, on all threads.
+template <typename F> void forEachItem(const uint8_t* p, size_t count, size_t stride, F&& item)
+{
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i)
+                              item(p + i * stride, i);
+                      });
+}
+
+/// A binary vertex element without lists, read where it lies, on all threads (value by value on
+/// one thread, the 1.7M-particle frame's 48 MB raw mesh took 0.15-0.2 s of `post` on 2 cores).
+/// False, having read nothing, for any other: readPly reads it item by item.
+bool readVertices(ByteReader& in, const io_internal::PlyElement& e, size_t count, bool be,
+                  const int (&xyz)[3], const int* nxyz, TriangleMesh& m)
+{
+    std::vector<size_t> offset(e.props.size() + 1, 0);
+    for (size_t k = 0; k < e.props.size(); ++k) {
+        if (e.props[k].isList) return false;
+        offset[k + 1] = offset[k] + e.props[k].type.size;
+    }
+    const size_t stride = offset.back();
+    if (stride == 0 || count > in.remaining() / stride) return false;
+    const uint8_t* p = in.take(count * stride, "PLY data");
+    const size_t first = m.points.size(), firstNormal = m.normals.size();
+    util::resizeInParallel(m.points, first + count);
+    if (nxyz) util::resizeInParallel(m.normals, firstNormal + count);
+    forEachItem(p, count, stride, [&](const uint8_t* item, size_t i) {
+        auto value = [&](int k) {
+            return float(
+                io_internal::loadPlyNumber(item + offset[size_t(k)], e.props[size_t(k)].type, be));
+        };
+        m.points[first + i] = Vec3f(value(xyz[0]), value(xyz[1]), value(xyz[2]));
+        if (nxyz)
+            m.normals[firstNormal + i] = Vec3f(value(nxyz[0]), value(nxyz[1]), value(nxyz[2]));
+    });
+    return true;
+}
+
+/// A binary face element that holds only its index list, each face a triangle of points read
+/// so far, on all threads: whether that is so is checked first, at the places it implies
+/// (each list 3 long puts the next where the check looks). False, having read nothing,
+/// otherwise: readPly reads it item by item, and names what is wrong.
+bool readTriangles(ByteReader& in, const io_internal::PlyElement& e, size_t count, bool be,
+                   TriangleMesh& m)
+{
+    if (e.props.size() != 1) return false;
+    const io_internal::PlyProperty& list = e.props[0]; // (the index list: the caller's check)
+    const size_t lengthSize = list.countType.size, stride = lengthSize + 3 * list.type.size;
+    if (count > in.remaining() / stride) return false;
+    const uint8_t* p = in.cursor();
+    const double points = double(m.points.size());
+    auto index = [&](const uint8_t* item, int c) {
+        return io_internal::loadPlyNumber(item + lengthSize + size_t(c) * list.type.size, list.type,
+                                          be);
+    };
+    const bool triangles = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, count, 1 << 14), true,
+        [&](const tbb::blocked_range<size_t>& r, bool ok) {
+            for (size_t i = r.begin(); i != r.end() && ok; ++i) {
+                const uint8_t* item = p + i * stride;
+                ok = io_internal::loadPlyNumber(item, list.countType, be) == 3;
+                for (int c = 0; c < 3 && ok; ++c) {
+                    const double v = index(item, c);
+                    ok = v >= 0 && v < points;
+                }
+            }
+            return ok;
+        },
+        [](bool a, bool b) { return a && b; });
+    if (!triangles) return false;
+    in.take(count * stride, "PLY data");
+    const size_t first = m.triangles.size();
+    util::resizeInParallel(m.triangles, first + count);
+    forEachItem(p, count, stride, [&](const uint8_t* item, size_t i) {
+        m.triangles[first + i] = {uint32_t(index(item, 0)), uint32_t(index(item, 1)),
+                                  uint32_t(index(item, 2))};
+    });
+    return true;
+}
+
 TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path,
                      std::vector<std::string>* dropped)
 {
@@ -103,6 +190,11 @@ TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path,
             in.fail("the PLY vertex element has no x, y, z properties");
         if (faceElement && indices < 0) in.fail("the PLY face element has no vertex_indices list");
         const bool withNormals = vertex && nxyz[0] >= 0 && nxyz[1] >= 0 && nxyz[2] >= 0;
+        const bool be = format == io_internal::PlyFormat::BigEndian;
+        if (format != io_internal::PlyFormat::Ascii &&
+            (vertex ? readVertices(in, e, count, be, xyz, withNormals ? nxyz : nullptr, m)
+                    : faceElement && indices == 0 && readTriangles(in, e, count, be, m)))
+            continue;
         if (vertex) m.points.reserve(count);
         if (withNormals) m.normals.reserve(count);
         std::vector<double> values(e.props.size());

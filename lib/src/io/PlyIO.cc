@@ -5,7 +5,12 @@
 #include "io/PlyHeader.h"
 #include "io/TextParse.h"
 
+#include "util/Memory.h"
+
 #include <fluidsurf/Error.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <limits>
 
@@ -44,26 +49,41 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
             if (ix < 0 || iy < 0 || iz < 0) in.fail("vertex element lacks x, y, z properties");
             const size_t n = in.checkedCount(
                 e.count, fmt == PlyFormat::Ascii ? 2 * e.props.size() : stride, "vertices");
-            std::vector<double> values(n * e.props.size());
+            const size_t np = e.props.size();
+            // Property k of vertex i: ascii text is parsed first (in order, one thread), binary
+            // values are read where they lie, on all threads. (Every binary value went through
+            // an array of doubles first, on one thread: 88 ms and 40 MB for the 1.7M-particle
+            // frame's 20 MB PLY on 2 cores.)
+            std::vector<double> values;
+            const uint8_t* body = nullptr;
+            std::vector<size_t> offset(np, 0); // within a binary vertex
             if (fmt == PlyFormat::Ascii) {
+                values.resize(n * np);
                 for (size_t i = 0; i < values.size(); ++i) {
                     values[i] = readAsciiNumber(in, "vertex data");
-                    if ((i + 1) % e.props.size() == 0) expectLineEnd(in, "vertex data");
+                    if ((i + 1) % np == 0) expectLineEnd(in, "vertex data");
                 }
             } else {
-                const uint8_t* p = in.take(n * stride, "vertex data");
-                for (size_t i = 0; i < n; ++i)
-                    for (const PlyProperty& prop : e.props) {
-                        values[&prop - e.props.data() + i * e.props.size()] =
-                            loadPlyNumber(p, prop.type, be);
-                        p += prop.type.size;
-                    }
+                body = in.take(n * stride, "vertex data");
+                for (size_t k = 1; k < np; ++k)
+                    offset[k] = offset[k - 1] + e.props[k - 1].type.size;
             }
-            const size_t np = e.props.size();
-            set.positions.resize(n);
-            for (size_t i = 0; i < n; ++i)
-                set.positions[i] = Vec3f(float(values[i * np + ix]), float(values[i * np + iy]),
-                                         float(values[i * np + iz]));
+            auto value = [&](size_t i, size_t k) {
+                return body ? loadPlyNumber(body + i * stride + offset[k], e.props[k].type, be)
+                            : values[i * np + k];
+            };
+            auto fill = [&](size_t count, auto&& item) {
+                tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 14),
+                                  [&](const tbb::blocked_range<size_t>& r) {
+                                      for (size_t i = r.begin(); i != r.end(); ++i)
+                                          item(i);
+                                  });
+            };
+            util::resizeInParallel(set.positions, n);
+            fill(n, [&](size_t i) {
+                set.positions[i] = Vec3f(float(value(i, size_t(ix))), float(value(i, size_t(iy))),
+                                         float(value(i, size_t(iz))));
+            });
             // Remaining properties, regrouping base_0..base_k-1 runs of one kind (float or int).
             std::vector<std::string> names;
             for (const PlyProperty& prop : e.props)
@@ -81,15 +101,17 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
                 const int comps = int(run);
                 if (e.props[k].type.isFloat) {
                     std::vector<float> v(n * comps);
-                    for (size_t i = 0; i < n; ++i)
+                    fill(n, [&](size_t i) {
                         for (int c = 0; c < comps; ++c)
-                            v[i * comps + c] = float(values[i * np + k + c]);
+                            v[i * comps + c] = float(value(i, k + c));
+                    });
                     set.addFloat(name, comps, std::move(v));
                 } else {
                     std::vector<int64_t> v(n * comps);
-                    for (size_t i = 0; i < n; ++i)
+                    fill(n, [&](size_t i) {
                         for (int c = 0; c < comps; ++c)
-                            v[i * comps + c] = int64_t(values[i * np + k + c]);
+                            v[i * comps + c] = int64_t(value(i, k + c));
+                    });
                     set.addInt(name, comps, std::move(v));
                 }
                 k += run;

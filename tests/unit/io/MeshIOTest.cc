@@ -258,3 +258,67 @@ TEST(MeshIO, VtkValuesBigEndianAcrossTheWritersBlocks)
         EXPECT_TRUE(in.atEnd());
     }
 }
+
+TEST(MeshIO, BinaryPlyMeshesReadAsTheyLieOrItemByItem)
+{
+    // Large enough for several of the reader's parallel ranges (16,384 items), in either byte
+    // order, with a property between the coordinates and normals in doubles; then with a quad
+    // among the triangles and with an index past the points, which leave the parallel path.
+    const uint32_t np = 40000, nt = 70001;
+    auto point = [](uint32_t i) { return Vec3f(float(i), -0.5f * float(i), 1.f / float(i + 1)); };
+    auto normal = [](uint32_t i) { return Vec3f(0.f, float(double(i) / 3), -float(i)); };
+    auto triangle = [&](uint32_t t) {
+        return std::array<uint32_t, 3>{t % np, (t * 13 + 5) % np, (np - 1) - t % np};
+    };
+    for (int variant = 0; variant < 4; ++variant) {
+        SCOPED_TRACE(variant);
+        const bool big = variant != 1;
+        const uint32_t quadAt = variant == 2 ? 50000 : nt, badAt = variant == 3 ? 60000 : nt;
+        ByteBuilder b;
+        b.text(std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+               " 1.0\nelement vertex " + std::to_string(np) +
+               "\nproperty float x\nproperty uchar q\nproperty float y\nproperty float z\n"
+               "property double nx\nproperty double ny\nproperty double nz\nelement face " +
+               std::to_string(nt) + "\nproperty list uchar int vertex_indices\nend_header\n");
+        auto put = [&](auto v) { big ? b.be(v) : b.le(v); };
+        for (uint32_t i = 0; i < np; ++i) {
+            const Vec3f p = point(i), n = normal(i);
+            put(p.x), put(uint8_t(i)), put(p.y), put(p.z);
+            put(double(n.x)), put(double(n.y)), put(double(n.z));
+        }
+        for (uint32_t t = 0; t < nt; ++t) {
+            const auto tri = triangle(t);
+            put(uint8_t(t == quadAt ? 4 : 3));
+            put(int32_t(t == badAt ? np : tri[0])), put(int32_t(tri[1])), put(int32_t(tri[2]));
+            if (t == quadAt) put(int32_t(7));
+        }
+        if (variant == 3) {
+            try {
+                io::readMeshFromMemory(reinterpret_cast<const uint8_t*>(b.s.data()), b.s.size(),
+                                       io::MeshFormat::Ply, "m.ply");
+                ADD_FAILURE() << "no error";
+            } catch (const InputError& e) {
+                EXPECT_NE(std::string(e.what()).find(
+                              "m.ply: face vertex index 40000 outside the 40000 vertices"),
+                          std::string::npos)
+                    << e.what();
+            }
+            continue;
+        }
+        const TriangleMesh m = io::readMeshFromMemory(reinterpret_cast<const uint8_t*>(b.s.data()),
+                                                      b.s.size(), io::MeshFormat::Ply, "m.ply");
+        ASSERT_EQ(m.points.size(), np);
+        ASSERT_EQ(m.normals.size(), np);
+        size_t bad = 0;
+        for (uint32_t i = 0; i < np; ++i)
+            bad += m.points[i] != point(i) || m.normals[i] != normal(i);
+        ASSERT_EQ(m.triangles.size(), variant == 2 ? nt + 1 : nt);
+        for (uint32_t t = 0, k = 0; t < nt; ++t, ++k) {
+            const auto tri = triangle(t);
+            bad += m.triangles[k] != tri;
+            if (t == quadAt) // fanned: (a, b, c), (a, c, 7)
+                bad += m.triangles[++k] != std::array<uint32_t, 3>{tri[0], tri[2], 7};
+        }
+        EXPECT_EQ(bad, 0u);
+    }
+}

@@ -45,3 +45,50 @@ TEST(Ply, MissingCoordinatesNamed)
                           "float y\nend_header\n1 2\n";
     EXPECT_NE(readError(f, ParticleFormat::Ply).find("lacks x, y, z"), std::string::npos);
 }
+
+TEST(Ply, ManyBinaryVerticesOfMixedTypesInEitherByteOrder)
+{
+    // more vertices than one of the reader's parallel ranges (16,384), properties of every
+    // size around the coordinates, values chosen per vertex so that a value read from the
+    // wrong vertex or the wrong place in it shows
+    const uint32_t n = 70001;
+    for (const bool big : {true, false}) {
+        SCOPED_TRACE(big ? "big-endian" : "little-endian");
+        ByteBuilder b;
+        b.text(std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+               " 1.0\nelement vertex " + std::to_string(n) +
+               "\nproperty uchar flag\nproperty double x\nproperty short t\nproperty float y\n"
+               "property uint id\nproperty double z\nproperty float v_0\nproperty float v_1\n"
+               "property char s\nend_header\n");
+        auto put = [&](auto v) { big ? b.be(v) : b.le(v); };
+        for (uint32_t i = 0; i < n; ++i) {
+            put(uint8_t(i % 251));
+            put(double(i) * 1e-3 + 1.0 / 3);
+            put(int16_t(int(i % 60000) - 30000));
+            put(-float(i) * 0.25f);
+            put(4000000000u - i);
+            put(1e10 - double(i));
+            put(float(i) + 0.5f);
+            put(-float(i));
+            put(int8_t(int(i % 256) - 128));
+        }
+        const ParticleSet ps = readBytes(b.s, ParticleFormat::Ply);
+        ASSERT_EQ(ps.size(), n);
+        const Attribute *flag = ps.find("flag"), *t = ps.find("t"), *id = ps.find("id"),
+                        *v = ps.find("v"), *s = ps.find("s");
+        ASSERT_TRUE(flag && t && id && v && s);
+        ASSERT_EQ(v->components, 2);
+        size_t bad = 0;
+        for (uint32_t i = 0; i < n; ++i) {
+            const Vec3f p(float(double(i) * 1e-3 + 1.0 / 3), -float(i) * 0.25f,
+                          float(1e10 - double(i)));
+            bad += ps.positions[i] != p;
+            bad += flag->ints[i] != int64_t(i % 251);
+            bad += t->ints[i] != int64_t(i % 60000) - 30000;
+            bad += id->ints[i] != int64_t(4000000000u - i);
+            bad += v->floats[2 * i] != float(i) + 0.5f || v->floats[2 * i + 1] != -float(i);
+            bad += s->ints[i] != int64_t(i % 256) - 128;
+        }
+        EXPECT_EQ(bad, 0u);
+    }
+}
