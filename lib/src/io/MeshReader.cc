@@ -8,6 +8,7 @@
 
 #include "io/ByteReader.h"
 #include "io/FileBuffer.h"
+#include "io/ObjInParallel.h"
 #include "io/PlyHeader.h"
 #include "io/TextParse.h"
 
@@ -42,7 +43,8 @@ TriangleMesh readObj(const uint8_t* data, size_t size, const std::string& path)
     std::vector<uint32_t> face;
     while (!in.atEnd()) {
         ++lineNo;
-        const std::vector<std::string> w = io_internal::splitWords(in.line("an OBJ line", 1 << 20));
+        const std::vector<std::string> w =
+            io_internal::splitWords(in.line("an OBJ line", io_internal::kObjLineLimit));
         if (w.empty() || w[0][0] == '#') continue;
         if (w[0] == "v" || w[0] == "vn") {
             if (w.size() < 4) fail("'" + w[0] + "' needs three numbers");
@@ -247,8 +249,10 @@ TriangleMesh readMeshFromMemory(const uint8_t* data, size_t size, MeshFormat for
         throw InputError(source + ": cannot read this mesh type (readable: .obj .ply; .vtk "
                                   "meshes are written only)");
     if (size == 0) throw InputError(source + ": file is empty");
-    return format == MeshFormat::Obj ? readObj(data, size, source)
-                                     : readPly(data, size, source, dropped);
+    if (format == MeshFormat::Ply) return readPly(data, size, source, dropped);
+    TriangleMesh m;
+    if (io_internal::readObjInParallel(data, size, m)) return m;
+    return readObj(data, size, source);
 }
 
 TriangleMesh readMesh(const std::string& path, std::vector<std::string>* dropped)

@@ -1,6 +1,8 @@
 // Mesh writers: a tetrahedron written as OBJ, PLY and VTK, parsed back independently.
 #include "TestData.h"
 
+#include "io/ObjInParallel.h"
+
 #include <fluidsurf/io/MeshIO.h>
 
 #include <sstream>
@@ -320,5 +322,79 @@ TEST(MeshIO, BinaryPlyMeshesReadAsTheyLieOrItemByItem)
                 bad += m.triangles[++k] != std::array<uint32_t, 3>{tri[0], tri[2], 7};
         }
         EXPECT_EQ(bad, 0u);
+    }
+}
+
+TEST(MeshIO, LargeObjReadAsOneThreadReadsIt)
+{
+    // Several of the reader's 1 MiB pieces: vertices interleaved with faces that reach back
+    // across pieces by negative indices, quads, a/b/c and a//c corners, CRLF line ends,
+    // comments, texture coordinates and vertex colours; normals one per vertex or not.
+    const uint32_t np = 60000;
+    for (const bool normalsForAll : {true, false}) {
+        SCOPED_TRACE(normalsForAll);
+        std::string f = "# made by the test\r\n";
+        std::vector<Vec3f> points, normals;
+        std::vector<std::array<uint32_t, 3>> triangles;
+        for (uint32_t i = 0; i < np; ++i) {
+            const Vec3f p(float(i) * 0.125f, -float(i), 1.f / float(i + 3));
+            points.push_back(p);
+            f += "v " + std::to_string(p.x) + " " + std::to_string(p.y) + "  " +
+                 std::to_string(p.z) + " 0.5 0.5 0.5\r\n";
+            // (std::to_string prints 6 decimals: the expected point is what that text reads as)
+            points.back() = Vec3f(std::stof(std::to_string(p.x)), std::stof(std::to_string(p.y)),
+                                  std::stof(std::to_string(p.z)));
+            if (normalsForAll || i % 2 == 0) {
+                f += "vn 0 1 " + std::to_string(i) + "\n";
+                normals.push_back(Vec3f(0.f, 1.f, float(i)));
+            }
+            f += "vt 0.1 0.2\n";
+            if (i >= 3 && i % 3 == 0) { // a triangle by negative indices, the last 3 read
+                f += "f -1//-1 -3//-3 -2//-2\n";
+                triangles.push_back({i, i - 2, i - 1});
+            }
+            if (i >= 40000 && i % 7 == 0) { // a quad far back, absolute, a/b/c
+                const uint32_t a = i - 39000, b = i / 2, c = 5, d = i;
+                f += "f " + std::to_string(a + 1) + "/1/1 " + std::to_string(b + 1) + "/2/2\t" +
+                     std::to_string(c + 1) + " " + std::to_string(d + 1) + "/3\n";
+                triangles.push_back({a, b, c});
+                triangles.push_back({a, c, d});
+            }
+        }
+        f += "# the end, without a line end";
+        ASSERT_GT(f.size(), size_t(3) << 20);
+        // read on all threads, not left to the line-by-line reader (which would hide a wrong
+        // result of its own by refusing it)
+        TriangleMesh m;
+        ASSERT_TRUE(io_internal::readObjInParallel(reinterpret_cast<const uint8_t*>(f.data()),
+                                                   f.size(), m));
+        EXPECT_TRUE(m.points == points);
+        EXPECT_TRUE(m.triangles == triangles);
+        if (normalsForAll)
+            EXPECT_TRUE(m.normals == normals);
+        else
+            EXPECT_TRUE(m.normals.empty()) << "normals are kept only one per vertex";
+
+        EXPECT_TRUE(io::readMeshFromMemory(reinterpret_cast<const uint8_t*>(f.data()), f.size(),
+                                           io::MeshFormat::Obj, "m.obj")
+                        .triangles == triangles);
+
+        // an index past the vertices, far into the file: the message names its line
+        const size_t at = f.find("\nf ", f.size() / 2) + 1;
+        const size_t line = size_t(std::count(f.begin(), f.begin() + long(at), '\n')) + 1;
+        std::string bad = f;
+        bad.replace(at, 2, "f 999999 ");
+        try {
+            io::readMeshFromMemory(reinterpret_cast<const uint8_t*>(bad.data()), bad.size(),
+                                   io::MeshFormat::Obj, "m.obj");
+            ADD_FAILURE() << "no error";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("vertex index 999999 outside the"),
+                      std::string::npos)
+                << e.what();
+            EXPECT_NE(std::string(e.what()).find("(at line " + std::to_string(line) + ")"),
+                      std::string::npos)
+                << e.what();
+        }
     }
 }
