@@ -9,6 +9,9 @@
 #include <vector>
 
 namespace fluidsurf {
+namespace io {
+class StreamFile;
+}
 namespace io_internal {
 
 using Bytes = std::vector<uint8_t>;
@@ -34,9 +37,11 @@ ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& s
                           std::string* detail);
 
 Bytes encodeBgeo(const ParticleSet& particles);
-Bytes encodeVtkLegacy(const ParticleSet& particles);
-Bytes encodePly(const ParticleSet& particles);
-Bytes encodeXyz(const ParticleSet& particles);
+/// Streamed into out, encoded in parallel blocks (StreamFile.h's writeItems): no whole file in
+/// memory. OutputError for what the format cannot hold, before anything is written.
+void writeVtkLegacy(const ParticleSet& particles, io::StreamFile& out);
+void writePly(const ParticleSet& particles, io::StreamFile& out);
+void writeXyz(const ParticleSet& particles, io::StreamFile& out);
 void writeVdbPoints(const ParticleSet& particles, const std::string& path, bool compress);
 
 /// Parse a decimal number of the whole token (no trailing garbage); false if it is not one.

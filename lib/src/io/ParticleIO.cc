@@ -4,6 +4,7 @@
 
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
+#include "io/StreamFile.h"
 #include "io/TextParse.h"
 
 #include <fluidsurf/Error.h>
@@ -230,35 +231,29 @@ void writeParticles(const ParticleSet& particles, const std::string& path,
     } catch (const ValueError& e) {
         throw OutputError(path + ": " + e.what());
     }
-    Bytes bytes;
     try {
-        switch (format) {
-        case ParticleFormat::VdbPoints:
+        if (format == ParticleFormat::VdbPoints) {
             writeVdbPoints(particles, path, options.compress);
-            return;
-        case ParticleFormat::Bgeo: {
-            bytes = encodeBgeo(particles);
+        } else if (format == ParticleFormat::Bgeo) {
+            Bytes bytes = encodeBgeo(particles);
             const std::string p = lower(path);
             if (endsWith(p, ".gz")) bytes = gzipCompress(bytes.data(), bytes.size());
-            break;
-        }
-        case ParticleFormat::Ply:
-            bytes = encodePly(particles);
-            break;
-        case ParticleFormat::Xyz:
-            bytes = encodeXyz(particles);
-            break;
-        case ParticleFormat::VtkLegacy:
-            bytes = encodeVtkLegacy(particles);
-            break;
-        default:
-            break;
+            writeFileAtomic(path, bytes.data(), bytes.size());
+        } else {
+            // streamed: the temporary goes if anything fails on the way
+            io::StreamFile out(path);
+            if (format == ParticleFormat::Ply)
+                writePly(particles, out);
+            else if (format == ParticleFormat::Xyz)
+                writeXyz(particles, out);
+            else
+                writeVtkLegacy(particles, out);
+            out.commit();
         }
     } catch (const OutputError& e) {
         const std::string msg = e.what();
         throw OutputError(msg.rfind(path, 0) == 0 ? msg : path + ": " + msg);
     }
-    writeFileAtomic(path, bytes.data(), bytes.size());
 }
 
 } // namespace io

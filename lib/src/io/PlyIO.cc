@@ -3,6 +3,7 @@
 // ... are regrouped into one multi-component attribute, which is how the writer stores them).
 // Elements before "vertex" (and list properties) are read past; elements after it are ignored.
 #include "io/PlyHeader.h"
+#include "io/StreamFile.h"
 #include "io/TextParse.h"
 
 #include "util/Memory.h"
@@ -153,7 +154,7 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
     return set;
 }
 
-Bytes encodePly(const ParticleSet& ps)
+void writePly(const ParticleSet& ps, io::StreamFile& out)
 {
     ps.validate();
     std::string h = "ply\nformat binary_little_endian 1.0\ncomment written by fluidsurf\n";
@@ -174,25 +175,20 @@ Bytes encodePly(const ParticleSet& ps)
         stride += 4 * size_t(a.components);
     }
     h += "end_header\n";
-    Bytes out(h.begin(), h.end());
-    const size_t start = out.size();
-    out.resize(start + stride * ps.size());
-    uint8_t* p = out.data() + start;
-    for (size_t i = 0; i < ps.size(); ++i) {
-        std::memcpy(p, &ps.positions[i], 12);
-        p += 12;
+    out.write(h);
+    writeItems(out, ps.size(), stride, [&](std::string& o, size_t i) {
+        o.append(reinterpret_cast<const char*>(&ps.positions[i]), 12);
         for (const Attribute& a : ps.attributes)
-            for (int c = 0; c < a.components; ++c, p += 4) {
+            for (int c = 0; c < a.components; ++c) {
                 const size_t k = i * a.components + c;
-                if (a.type == AttributeType::Float)
-                    std::memcpy(p, &a.floats[k], 4);
-                else {
-                    const int32_t v = int32_t(a.ints[k]);
-                    std::memcpy(p, &v, 4);
+                if (a.type == AttributeType::Float) {
+                    o.append(reinterpret_cast<const char*>(&a.floats[k]), 4);
+                } else {
+                    const int32_t v = int32_t(a.ints[k]); // (in range: checked above)
+                    o.append(reinterpret_cast<const char*>(&v), 4);
                 }
             }
-    }
-    return out;
+    });
 }
 
 } // namespace io_internal

@@ -3,6 +3,8 @@
 // NORMALS / TEXTURE_COORDINATES / TENSORS / FIELD arrays. Cells (VTK 4.x and 5.x layouts) and
 // CELL_DATA are read past, since particles are the points. The writer emits BINARY POLYDATA
 // with one VERTICES cell per particle (so ParaView draws them) and a FIELD array per attribute.
+#include "io/BigEndian.h"
+#include "io/StreamFile.h"
 #include "io/TextParse.h"
 
 #include <fluidsurf/Error.h>
@@ -405,71 +407,48 @@ ParticleSet readVtkLegacy(const uint8_t* data, size_t size, const std::string& s
     return VtkLegacyParser(data, size, src).parse(detail);
 }
 
-namespace {
-void putBE(Bytes& out, const void* v, size_t n)
-{
-    const uint8_t* c = static_cast<const uint8_t*>(v);
-    for (size_t i = 0; i < n; ++i)
-        out.push_back(c[n - 1 - i]);
-}
-void putText(Bytes& out, const std::string& s)
-{
-    out.insert(out.end(), s.begin(), s.end());
-}
-} // namespace
-
-Bytes encodeVtkLegacy(const ParticleSet& ps)
+void writeVtkLegacy(const ParticleSet& ps, io::StreamFile& out)
 {
     ps.validate();
     if (ps.size() > size_t(INT32_MAX / 2))
         throw OutputError("too many particles for legacy VTK's int32 cells");
-    Bytes out;
-    size_t perPoint = 20;
-    for (const Attribute& a : ps.attributes) {
+    for (const Attribute& a : ps.attributes)
         if (a.name.empty() || a.name.find_first_of(" \t\r\n") != std::string::npos)
             throw OutputError("attribute name '" + a.name + "' cannot be stored in legacy VTK");
-        perPoint += 8 * size_t(a.components);
-    }
-    out.reserve(256 + ps.size() * perPoint);
-    putText(out,
-            "# vtk DataFile Version 4.2\nfluidsurf particles\nBINARY\nDATASET POLYDATA\nPOINTS " +
-                std::to_string(ps.size()) + " float\n");
-    for (const Vec3f& p : ps.positions)
-        putBE(out, &p.x, 4), putBE(out, &p.y, 4), putBE(out, &p.z, 4);
-    putText(out,
-            "\nVERTICES " + std::to_string(ps.size()) + " " + std::to_string(2 * ps.size()) + "\n");
-    for (size_t i = 0; i < ps.size(); ++i) {
-        const int32_t one = 1, idx = int32_t(i);
-        putBE(out, &one, 4);
-        putBE(out, &idx, 4);
-    }
-    putText(out, "\n");
-    if (ps.attributes.empty()) return out;
-    putText(out, "POINT_DATA " + std::to_string(ps.size()) + "\nFIELD FieldData " +
-                     std::to_string(ps.attributes.size()) + "\n");
+    const std::string n = std::to_string(ps.size());
+    out.write("# vtk DataFile Version 4.2\nfluidsurf particles\nBINARY\nDATASET POLYDATA\nPOINTS " +
+              n + " float\n");
+    writeItems(out, ps.size(), 12, [&](std::string& o, size_t i) {
+        const Vec3f& p = ps.positions[i];
+        const uint32_t b[3] = {bitsOf(p.x), bitsOf(p.y), bitsOf(p.z)};
+        appendBigEndian(o, b, 3);
+    });
+    out.write("\nVERTICES " + n + " " + std::to_string(2 * ps.size()) + "\n");
+    writeItems(out, ps.size(), 8, [&](std::string& o, size_t i) {
+        const uint32_t b[2] = {1, uint32_t(i)}; // (i < 2^30: checked above)
+        appendBigEndian(o, b, 2);
+    });
+    out.write("\n");
+    if (ps.attributes.empty()) return;
+    out.write("POINT_DATA " + n + "\nFIELD FieldData " + std::to_string(ps.attributes.size()) +
+              "\n");
     for (const Attribute& a : ps.attributes) {
         bool wide = false;
         for (int64_t v : a.ints)
             wide = wide || v < INT32_MIN || v > INT32_MAX;
-        const char* type =
-            a.type == AttributeType::Float ? "float" : (wide ? "vtktypeint64" : "int");
-        putText(out, a.name + " " + std::to_string(a.components) + " " + std::to_string(ps.size()) +
-                         " " + type + "\n");
-        if (a.type == AttributeType::Float) {
-            for (float v : a.floats)
-                putBE(out, &v, 4);
-        } else if (wide) {
-            for (int64_t v : a.ints)
-                putBE(out, &v, 8);
-        } else {
-            for (int64_t v : a.ints) {
-                const int32_t w = int32_t(v);
-                putBE(out, &w, 4);
+        const bool isFloat = a.type == AttributeType::Float;
+        out.write(a.name + " " + std::to_string(a.components) + " " + n + " " +
+                  (isFloat ? "float" : (wide ? "vtktypeint64" : "int")) + "\n");
+        writeItems(out, a.size(), wide ? 8 : 4, [&](std::string& o, size_t k) {
+            if (wide) {
+                appendBigEndian64(o, uint64_t(a.ints[k]));
+            } else {
+                const uint32_t b = isFloat ? bitsOf(a.floats[k]) : bitsOf(int32_t(a.ints[k]));
+                appendBigEndian(o, &b, 1);
             }
-        }
-        putText(out, "\n");
+        });
+        out.write("\n");
     }
-    return out;
 }
 
 } // namespace io_internal

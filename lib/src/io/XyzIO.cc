@@ -4,6 +4,7 @@
 #include "io/ByteReader.h"
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
+#include "io/StreamFile.h"
 #include "io/TextParse.h"
 
 #include "util/Memory.h"
@@ -63,11 +64,14 @@ ParticleSet readXyz(const OpenFile& file, std::string* detail)
     return set;
 }
 
-Bytes encodeXyz(const ParticleSet& ps)
+void writeXyz(const ParticleSet& ps, io::StreamFile& out)
 {
-    Bytes out(ps.size() * 12);
-    if (!out.empty()) std::memcpy(out.data(), ps.positions.data(), out.size());
-    return out;
+    // the positions as they lie (little-endian host), a piece at a time so that the disk starts
+    // on the first pieces while the rest are written (no copy of the file in memory)
+    const char* p = reinterpret_cast<const char*>(ps.positions.data());
+    const size_t size = ps.size() * 12;
+    for (size_t at = 0; at < size; at += io::StreamFile::kWriteBack)
+        out.write(p + at, std::min<size_t>(io::StreamFile::kWriteBack, size - at));
 }
 
 } // namespace io_internal

@@ -81,6 +81,9 @@ struct Case
 {
     const char* ext;
     bool attributes, ordered;
+    /// particles: the streamed writers (ply, vtk, xyz) encode 8,192 a chunk and 32 chunks a
+    /// block, so theirs cross blocks and end in a part-filled one
+    size_t count = 5000;
 };
 
 class RoundTrip : public ::testing::TestWithParam<Case>
@@ -93,7 +96,7 @@ TEST_P(RoundTrip, PositionsBitExactAttributesIntact)
 {
     const Case c = GetParam();
     TempDir dir;
-    const ParticleSet original = awkwardParticles(5000);
+    const ParticleSet original = awkwardParticles(c.count);
     const std::string path = dir.path(std::string("frame") + c.ext);
     io::writeParticles(original, path);
     const ParticleSet back = io::readParticles(path);
@@ -106,8 +109,9 @@ TEST_P(RoundTrip, PositionsBitExactAttributesIntact)
 
 INSTANTIATE_TEST_SUITE_P(Formats, RoundTrip,
                          ::testing::Values(Case{".bgeo", true, true}, Case{".bgeo.gz", true, true},
-                                           Case{".ply", true, true}, Case{".vtk", true, true},
-                                           Case{".xyz", false, true},
+                                           Case{".ply", true, true, 300001},
+                                           Case{".vtk", true, true, 300001},
+                                           Case{".xyz", false, true, 300001},
                                            // VDB buckets points by voxel: same particles, any order
                                            Case{".vdb", true, false}),
                          [](const auto& info) {
