@@ -8,6 +8,7 @@
 #include "io/ByteReader.h"
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
+#include "io/StreamFile.h"
 
 #include "util/Memory.h"
 
@@ -172,15 +173,15 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
 }
 
 namespace {
-void put32(Bytes& out, uint32_t v)
+void put32(std::string& out, uint32_t v)
 {
-    for (int s = 24; s >= 0; s -= 8)
-        out.push_back(uint8_t(v >> s));
+    const uint32_t b = __builtin_bswap32(v);
+    out.append(reinterpret_cast<const char*>(&b), 4);
 }
-void put16(Bytes& out, uint16_t v)
+void put16(std::string& out, uint16_t v)
 {
-    out.push_back(uint8_t(v >> 8));
-    out.push_back(uint8_t(v));
+    out += char(v >> 8);
+    out += char(v);
 }
 uint32_t bitsOf(float f)
 {
@@ -188,9 +189,10 @@ uint32_t bitsOf(float f)
     std::memcpy(&u, &f, 4);
     return u;
 }
-} // namespace
 
-Bytes encodeBgeo(const ParticleSet& ps)
+/// The file into out (a StreamFile, or BytesSink for the gzip writer, which compresses the whole
+/// file at once).
+template <typename Out> void putBgeo(const ParticleSet& ps, Out& out)
 {
     ps.validate();
     if (ps.size() > size_t(std::numeric_limits<int32_t>::max()))
@@ -203,44 +205,59 @@ Bytes encodeBgeo(const ParticleSet& ps)
                 throw OutputError("attribute '" + a.name + "' holds the value " +
                                   std::to_string(v) + ", beyond BGEO's 32-bit integers");
     }
-    Bytes out;
-    size_t perPoint = 16;
-    for (const Attribute& a : ps.attributes)
-        perPoint += 4 * size_t(a.components);
-    out.reserve(64 + ps.size() * perPoint);
-    for (char c : {'B', 'g', 'e', 'o', 'V'})
-        out.push_back(uint8_t(c));
-    put32(out, 5);
+    std::string head = "BgeoV";
+    put32(head, 5);
     const uint32_t counts[8] = {
         uint32_t(ps.size()), 0, 0, 0, uint32_t(ps.attributes.size()), 0, 0, 0};
     for (uint32_t c : counts)
-        put32(out, c);
+        put32(head, c);
+    size_t perPoint = 16;
     for (const Attribute& a : ps.attributes) {
-        put16(out, uint16_t(a.name.size()));
-        out.insert(out.end(), a.name.begin(), a.name.end());
-        put16(out, uint16_t(a.components));
+        put16(head, uint16_t(a.name.size()));
+        head += a.name;
+        put16(head, uint16_t(a.components));
         const bool isFloat = a.type == AttributeType::Float;
-        put32(out, isFloat ? (a.components == 3 ? kVector : kFloat) : kInt);
+        put32(head, isFloat ? (a.components == 3 ? kVector : kFloat) : kInt);
         for (int c = 0; c < a.components; ++c)
-            put32(out, 0); // defaults
+            put32(head, 0); // defaults
+        perPoint += 4 * size_t(a.components);
     }
-    for (size_t i = 0; i < ps.size(); ++i) {
+    out.write(head);
+    io::writeItems(out, ps.size(), perPoint, [&](std::string& o, size_t i) {
         const Vec3f& p = ps.positions[i];
-        put32(out, bitsOf(p.x));
-        put32(out, bitsOf(p.y));
-        put32(out, bitsOf(p.z));
-        put32(out, bitsOf(1.f));
-        for (const Attribute& a : ps.attributes) {
+        put32(o, bitsOf(p.x));
+        put32(o, bitsOf(p.y));
+        put32(o, bitsOf(p.z));
+        put32(o, bitsOf(1.f));
+        for (const Attribute& a : ps.attributes)
             for (int c = 0; c < a.components; ++c) {
                 const size_t k = i * a.components + c;
-                put32(out, a.type == AttributeType::Float ? bitsOf(a.floats[k])
-                                                          : uint32_t(int32_t(a.ints[k])));
+                put32(o, a.type == AttributeType::Float ? bitsOf(a.floats[k])
+                                                        : uint32_t(int32_t(a.ints[k])));
             }
-        }
-    }
-    out.push_back(0x00); // begin/end of the (empty) extra section, as partio writes it
-    out.push_back(0xff);
-    return out;
+    });
+    out.write(std::string("\x00\xff", 2)); // begin/end of the (empty) extra section, as partio
+                                           // writes it
+}
+
+struct BytesSink
+{
+    Bytes bytes;
+    void write(const std::string& s) { bytes.insert(bytes.end(), s.begin(), s.end()); }
+};
+
+} // namespace
+
+void writeBgeo(const ParticleSet& ps, io::StreamFile& out)
+{
+    putBgeo(ps, out);
+}
+
+Bytes encodeBgeo(const ParticleSet& ps)
+{
+    BytesSink sink;
+    putBgeo(ps, sink);
+    return std::move(sink.bytes);
 }
 
 } // namespace io_internal

@@ -234,15 +234,16 @@ void writeParticles(const ParticleSet& particles, const std::string& path,
     try {
         if (format == ParticleFormat::VdbPoints) {
             writeVdbPoints(particles, path, options.compress);
-        } else if (format == ParticleFormat::Bgeo) {
-            Bytes bytes = encodeBgeo(particles);
-            const std::string p = lower(path);
-            if (endsWith(p, ".gz")) bytes = gzipCompress(bytes.data(), bytes.size());
-            writeFileAtomic(path, bytes.data(), bytes.size());
+        } else if (format == ParticleFormat::Bgeo && endsWith(lower(path), ".gz")) {
+            const Bytes bytes = encodeBgeo(particles);
+            const Bytes zipped = gzipCompress(bytes.data(), bytes.size());
+            writeFileAtomic(path, zipped.data(), zipped.size());
         } else {
             // streamed: the temporary goes if anything fails on the way
             io::StreamFile out(path);
-            if (format == ParticleFormat::Ply)
+            if (format == ParticleFormat::Bgeo)
+                writeBgeo(particles, out);
+            else if (format == ParticleFormat::Ply)
                 writePly(particles, out);
             else if (format == ParticleFormat::Xyz)
                 writeXyz(particles, out);

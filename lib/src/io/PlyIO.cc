@@ -176,7 +176,7 @@ void writePly(const ParticleSet& ps, io::StreamFile& out)
     }
     h += "end_header\n";
     out.write(h);
-    writeItems(out, ps.size(), stride, [&](std::string& o, size_t i) {
+    io::writeItems(out, ps.size(), stride, [&](std::string& o, size_t i) {
         o.append(reinterpret_cast<const char*>(&ps.positions[i]), 12);
         for (const Attribute& a : ps.attributes)
             for (int c = 0; c < a.components; ++c) {

@@ -45,11 +45,12 @@ private:
 };
 
 /// Items [0, count) encoded by item(std::string& out, i), in chunks of 8192 items in parallel, 32
-/// chunks a block, written in order: the same bytes for any thread count, and at most two blocks
-/// of text in memory. The next block is encoded on the other threads while this one writes the
-/// last (one after the other, encoding was a fifth of a 16-thread write of the 13.1M drop's
-/// PLY).
-template <typename F> void writeItems(StreamFile& out, size_t count, size_t bytesPerItem, F&& item)
+/// chunks a block, written in order to out (a StreamFile, or anything with write(std::string)):
+/// the same bytes for any thread count, and at most two blocks of text in memory. The next block is
+/// encoded on the other threads while this one writes the last (one after the other, encoding was a
+/// fifth of a 16-thread write of the 13.1M drop's PLY).
+template <typename Out, typename F>
+void writeItems(Out& out, size_t count, size_t bytesPerItem, F&& item)
 {
     constexpr size_t kChunk = 8192, kChunksPerBlock = 32, kBlock = kChunk * kChunksPerBlock;
     std::vector<std::string> chunks[2] = {std::vector<std::string>(kChunksPerBlock),

@@ -418,13 +418,13 @@ void writeVtkLegacy(const ParticleSet& ps, io::StreamFile& out)
     const std::string n = std::to_string(ps.size());
     out.write("# vtk DataFile Version 4.2\nfluidsurf particles\nBINARY\nDATASET POLYDATA\nPOINTS " +
               n + " float\n");
-    writeItems(out, ps.size(), 12, [&](std::string& o, size_t i) {
+    io::writeItems(out, ps.size(), 12, [&](std::string& o, size_t i) {
         const Vec3f& p = ps.positions[i];
         const uint32_t b[3] = {bitsOf(p.x), bitsOf(p.y), bitsOf(p.z)};
         appendBigEndian(o, b, 3);
     });
     out.write("\nVERTICES " + n + " " + std::to_string(2 * ps.size()) + "\n");
-    writeItems(out, ps.size(), 8, [&](std::string& o, size_t i) {
+    io::writeItems(out, ps.size(), 8, [&](std::string& o, size_t i) {
         const uint32_t b[2] = {1, uint32_t(i)}; // (i < 2^30: checked above)
         appendBigEndian(o, b, 2);
     });
@@ -439,7 +439,7 @@ void writeVtkLegacy(const ParticleSet& ps, io::StreamFile& out)
         const bool isFloat = a.type == AttributeType::Float;
         out.write(a.name + " " + std::to_string(a.components) + " " + n + " " +
                   (isFloat ? "float" : (wide ? "vtktypeint64" : "int")) + "\n");
-        writeItems(out, a.size(), wide ? 8 : 4, [&](std::string& o, size_t k) {
+        io::writeItems(out, a.size(), wide ? 8 : 4, [&](std::string& o, size_t k) {
             if (wide) {
                 appendBigEndian64(o, uint64_t(a.ints[k]));
             } else {
