@@ -135,7 +135,6 @@ private:
     {
         static_assert(sizeof(Vec3f) == 3 * sizeof(float));
         typedef float Four __attribute__((vector_size(16)));
-        typedef int32_t Ints __attribute__((vector_size(32)));
         using V = util::WideLanes;
         const float* f = reinterpret_cast<const float*>(p);
         Four q[6];
@@ -147,11 +146,11 @@ private:
         const V m14 = halves(q[0], q[3]); // x0 y0 z0 x1 | x4 y4 z4 x5
         const V m25 = halves(q[1], q[4]); // y1 z1 x2 y2 | y5 z5 x6 y6
         const V m36 = halves(q[2], q[5]); // z2 x3 y3 z3 | z6 x7 y7 z7
-        const V xy = __builtin_shuffle(m25, m36, Ints{2, 3, 9, 10, 6, 7, 13, 14}); // x2 y2 x3 y3
-        const V yz = __builtin_shuffle(m14, m25, Ints{1, 2, 8, 9, 5, 6, 12, 13});  // y0 z0 y1 z1
-        const V rx = __builtin_shuffle(m14, xy, Ints{0, 3, 8, 10, 4, 7, 12, 14}) - o.x;
-        const V ry = __builtin_shuffle(yz, xy, Ints{0, 2, 9, 11, 4, 6, 13, 15}) - o.y;
-        const V rz = __builtin_shuffle(yz, m36, Ints{1, 3, 8, 11, 5, 7, 12, 15}) - o.z;
+        const V xy = __builtin_shufflevector(m25, m36, 2, 3, 9, 10, 6, 7, 13, 14); // x2 y2 x3 y3
+        const V yz = __builtin_shufflevector(m14, m25, 1, 2, 8, 9, 5, 6, 12, 13);  // y0 z0 y1 z1
+        const V rx = __builtin_shufflevector(m14, xy, 0, 3, 8, 10, 4, 7, 12, 14) - o.x;
+        const V ry = __builtin_shufflevector(yz, xy, 0, 2, 9, 11, 4, 6, 13, 15) - o.y;
+        const V rz = __builtin_shufflevector(yz, m36, 1, 3, 8, 11, 5, 7, 12, 15) - o.z;
         std::memcpy(x, &rx, sizeof rx);
         std::memcpy(y, &ry, sizeof ry);
         std::memcpy(z, &rz, sizeof rz);
@@ -179,7 +178,6 @@ private:
     {
         static_assert(kClassLanes == util::kWideLanes);
         using V = util::WideLanes;
-        typedef int32_t Ints __attribute__((vector_size(32)));
         auto low = [](V a, V b) { return a < b ? a : b; };  // (vminps)
         auto high = [](V a, V b) { return b < a ? a : b; }; // (vmaxps)
         // (each group loaded into a register of its own: copied as one block to the stack, the
@@ -193,22 +191,22 @@ private:
         V m[4], M[4];
         for (int k = 0; k < 4; ++k) {
             const V u = group(2 * k), w = group(2 * k + 1);
-            const V a = __builtin_shuffle(u, w, Ints{0, 1, 2, 3, 8, 9, 10, 11}),
-                    b = __builtin_shuffle(u, w, Ints{4, 5, 6, 7, 12, 13, 14, 15});
+            const V a = __builtin_shufflevector(u, w, 0, 1, 2, 3, 8, 9, 10, 11),
+                    b = __builtin_shufflevector(u, w, 4, 5, 6, 7, 12, 13, 14, 15);
             m[k] = low(a, b), M[k] = high(a, b); // lanes 0-3: group 2k's, 4-7: 2k + 1's
         }
         // two lanes a group: 4k, 4k + 2 in lanes 0-3, 4k + 1, 4k + 3 in 4-7
         auto pairs = [](V a, V b, auto f) {
-            return f(__builtin_shuffle(a, b, Ints{0, 1, 8, 9, 4, 5, 12, 13}),
-                     __builtin_shuffle(a, b, Ints{2, 3, 10, 11, 6, 7, 14, 15}));
+            return f(__builtin_shufflevector(a, b, 0, 1, 8, 9, 4, 5, 12, 13),
+                     __builtin_shufflevector(a, b, 2, 3, 10, 11, 6, 7, 14, 15));
         };
         const V n0 = pairs(m[0], m[1], low), n1 = pairs(m[2], m[3], low);
         const V N0 = pairs(M[0], M[1], high), N1 = pairs(M[2], M[3], high);
         // one lane a group: 0, 4, 2, 6, 1, 5, 3, 7, then in order
         auto ones = [](V a, V b, auto f) {
-            const V r = f(__builtin_shuffle(a, b, Ints{0, 8, 2, 10, 4, 12, 6, 14}),
-                          __builtin_shuffle(a, b, Ints{1, 9, 3, 11, 5, 13, 7, 15}));
-            return __builtin_shuffle(r, Ints{0, 4, 2, 6, 1, 5, 3, 7});
+            const V r = f(__builtin_shufflevector(a, b, 0, 8, 2, 10, 4, 12, 6, 14),
+                          __builtin_shufflevector(a, b, 1, 9, 3, 11, 5, 13, 7, 15));
+            return __builtin_shufflevector(r, r, 0, 4, 2, 6, 1, 5, 3, 7);
         };
         const V l = ones(n0, n1, low), h = ones(N0, N1, high);
         std::memcpy(lo, &l, sizeof l);
@@ -335,20 +333,19 @@ __attribute__((always_inline)) inline ParticleSums classifyWide(const LaneSums& 
 {
     typedef double Doubles4 __attribute__((vector_size(32)));
     typedef float Floats4 __attribute__((vector_size(16)));
-    typedef int32_t Ints __attribute__((vector_size(32)));
     util::WideLanes c, f, x, y;
     std::memcpy(&c, s.count, sizeof c), std::memcpy(&f, s.cf, sizeof f);
     std::memcpy(&x, s.gx, sizeof x), std::memcpy(&y, s.gy, sizeof y);
     // (lanes k of c and f, or of x and y, side by side in pairs, within each 128-bit half)
-    const util::WideLanes cf0 = __builtin_shuffle(c, f, Ints{0, 8, 1, 9, 4, 12, 5, 13}),
-                          cf1 = __builtin_shuffle(c, f, Ints{2, 10, 3, 11, 6, 14, 7, 15}),
-                          xy0 = __builtin_shuffle(x, y, Ints{0, 8, 1, 9, 4, 12, 5, 13}),
-                          xy1 = __builtin_shuffle(x, y, Ints{2, 10, 3, 11, 6, 14, 7, 15});
+    const util::WideLanes cf0 = __builtin_shufflevector(c, f, 0, 8, 1, 9, 4, 12, 5, 13),
+                          cf1 = __builtin_shufflevector(c, f, 2, 10, 3, 11, 6, 14, 7, 15),
+                          xy0 = __builtin_shufflevector(x, y, 0, 8, 1, 9, 4, 12, 5, 13),
+                          xy1 = __builtin_shufflevector(x, y, 2, 10, 3, 11, 6, 14, 7, 15);
     // t[k]: lane k's (count, cf, gx, gy) in its low half, lane k + 4's in its high half
-    const util::WideLanes t[4] = {__builtin_shuffle(cf0, xy0, Ints{0, 1, 8, 9, 4, 5, 12, 13}),
-                                  __builtin_shuffle(cf0, xy0, Ints{2, 3, 10, 11, 6, 7, 14, 15}),
-                                  __builtin_shuffle(cf1, xy1, Ints{0, 1, 8, 9, 4, 5, 12, 13}),
-                                  __builtin_shuffle(cf1, xy1, Ints{2, 3, 10, 11, 6, 7, 14, 15})};
+    const util::WideLanes t[4] = {__builtin_shufflevector(cf0, xy0, 0, 1, 8, 9, 4, 5, 12, 13),
+                                  __builtin_shufflevector(cf0, xy0, 2, 3, 10, 11, 6, 7, 14, 15),
+                                  __builtin_shufflevector(cf1, xy1, 0, 1, 8, 9, 4, 5, 12, 13),
+                                  __builtin_shufflevector(cf1, xy1, 2, 3, 10, 11, 6, 7, 14, 15)};
     static_assert(kClassLanes == 8);
     Doubles4 sum{}; // +0, as classifyLanes starts
     for (int half = 0; half < 2; ++half)
