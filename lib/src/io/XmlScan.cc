@@ -3,6 +3,9 @@
 
 #include "io/TextParse.h"
 
+#include <array>
+#include <cstdint>
+
 namespace fluidsurf {
 namespace io_internal {
 
@@ -103,36 +106,64 @@ int base64Value(uint8_t c)
 bool decodeBase64(const uint8_t* text, size_t length, std::string& out, size_t maxBytes,
                   size_t* charsUsed)
 {
-    out.clear();
+    // Each character's value, or -1 for anything else (white space, '=' and bad characters
+    // take the character-by-character way below).
+    static const std::array<int8_t, 256> kValue = [] {
+        std::array<int8_t, 256> t{};
+        for (int c = 0; c < 256; ++c)
+            t[size_t(c)] = int8_t(base64Value(uint8_t(c)) >= 0 ? base64Value(uint8_t(c)) : -1);
+        return t;
+    }();
+    // written in place (a push_back a byte was most of reading a base64 .vtu: 0.58 s for the
+    // 1.7M-particle frame's 36 MB on 2 cores); a quartet gives at most 3 bytes
+    out.assign(std::min(length / 4 * 3, maxBytes > SIZE_MAX - 2 ? SIZE_MAX : maxBytes + 2), '\0');
+    char* o = out.data();
+    size_t n = 0;
+    auto done = [&](size_t i, bool ok) {
+        out.resize(n);
+        if (charsUsed) *charsUsed = i;
+        return ok;
+    };
     int quad[4];
     int k = 0;
     size_t i = 0;
-    for (; i < length && out.size() < maxBytes; ++i) {
-        const uint8_t c = text[i];
-        if (isSpace(c)) continue;
-        const int v = base64Value(c);
-        if (v == -1) {
-            if (charsUsed) *charsUsed = i;
-            return false;
+    while (i < length && n < maxBytes) {
+        if (k == 0 && i + 4 <= length) { // four plain characters: a quartet at once
+            const int a = kValue[text[i]], b = kValue[text[i + 1]], c = kValue[text[i + 2]],
+                      d = kValue[text[i + 3]];
+            if ((a | b | c | d) >= 0) {
+                const uint32_t bits =
+                    uint32_t(a) << 18 | uint32_t(b) << 12 | uint32_t(c) << 6 | uint32_t(d);
+                o[n] = char(bits >> 16), o[n + 1] = char(bits >> 8), o[n + 2] = char(bits);
+                n += 3, i += 4;
+                continue;
+            }
         }
+        const uint8_t c = text[i];
+        if (isSpace(c)) {
+            ++i;
+            continue;
+        }
+        const int v = base64Value(c);
+        if (v == -1) return done(i, false);
         quad[k++] = v;
-        if (k < 4) continue;
+        if (k < 4) {
+            ++i;
+            continue;
+        }
         k = 0;
         // '=' pads the end of a quad only: x y = = or x y z =. (VTK concatenates separately
         // padded blocks, so a padded quad may be followed by more data.)
-        if (quad[0] < 0 || quad[1] < 0 || (quad[2] < 0 && quad[3] >= 0)) {
-            if (charsUsed) *charsUsed = i;
-            return false;
-        }
+        if (quad[0] < 0 || quad[1] < 0 || (quad[2] < 0 && quad[3] >= 0)) return done(i, false);
         const uint32_t bits = (uint32_t(quad[0]) << 18) | (uint32_t(quad[1]) << 12) |
                               (uint32_t(quad[2] < 0 ? 0 : quad[2]) << 6) |
                               uint32_t(quad[3] < 0 ? 0 : quad[3]);
-        out.push_back(char(bits >> 16));
-        if (quad[2] >= 0) out.push_back(char((bits >> 8) & 0xff));
-        if (quad[2] >= 0 && quad[3] >= 0) out.push_back(char(bits & 0xff));
+        o[n++] = char(bits >> 16);
+        if (quad[2] >= 0) o[n++] = char((bits >> 8) & 0xff);
+        if (quad[2] >= 0 && quad[3] >= 0) o[n++] = char(bits & 0xff);
+        ++i;
     }
-    if (charsUsed) *charsUsed = i;
-    return true;
+    return done(i, true);
 }
 
 } // namespace io_internal

@@ -1,6 +1,11 @@
 // VTK XML reader: .vtu/.vtp written here in every DataArray encoding VTK produces.
 #include "TestData.h"
 
+#include "io/XmlScan.h"
+
+#include <algorithm>
+#include <random>
+
 using namespace fluidsurf;
 using namespace fluidsurf::test;
 using io::ParticleFormat;
@@ -149,4 +154,91 @@ TEST(VtkXml, UnsupportedCompressorNamed)
     std::string f = makeVtu({"appended", "raw", true, false});
     f.replace(f.find("vtkZLibDataCompressor"), 21, "vtkLZ4DataCompressor");
     EXPECT_NE(readError(f, ParticleFormat::VtkXml).find("vtkLZ4DataCompressor"), std::string::npos);
+}
+
+namespace {
+
+/// base64 as the VTK XML reader must take it, one character at a time: white space skipped,
+/// separately padded quartets one after the other, a bad character or padding out of place
+/// refused where it stands, and no more quartets once maxBytes bytes are out.
+bool referenceBase64(const std::string& text, size_t maxBytes, std::string& out, size_t& used)
+{
+    const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    out.clear();
+    std::vector<int> quad;
+    size_t i = 0;
+    for (; i < text.size() && out.size() < maxBytes; ++i) {
+        const char c = text[i];
+        if (c == ' ' || c == '\n' || c == '\r' || c == '\t' || c == '\f' || c == '\v') continue;
+        const size_t v = alphabet.find(c);
+        if (v == std::string::npos && c != '=') {
+            used = i;
+            return false;
+        }
+        quad.push_back(c == '=' ? -1 : int(v));
+        if (quad.size() < 4) continue;
+        if (quad[0] < 0 || quad[1] < 0 || (quad[2] < 0 && quad[3] >= 0)) {
+            used = i;
+            return false;
+        }
+        const int bytes = quad[2] < 0 ? 1 : quad[3] < 0 ? 2 : 3;
+        const long bits = long(quad[0]) << 18 | long(quad[1]) << 12 |
+                          long(std::max(quad[2], 0)) << 6 | long(std::max(quad[3], 0));
+        for (int b = 0; b < bytes; ++b)
+            out += char(bits >> (16 - 8 * b) & 0xff);
+        quad.clear();
+    }
+    used = i;
+    return true;
+}
+
+} // namespace
+
+TEST(VtkXml, Base64DecodesAsCharacterByCharacter)
+{
+    // long plain runs (the decoder's quartet-at-once path) broken by white space, padded
+    // quartets within the stream, bad characters, short ends, and output limits
+    std::mt19937 rng(7);
+    const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    size_t refused = 0, limited = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+        std::string text;
+        const int pieces = int(rng() % 6) + 1;
+        for (int p = 0; p < pieces; ++p) {
+            const size_t n = rng() % 90;
+            for (size_t k = 0; k < n; ++k)
+                text += alphabet[rng() % 64];
+            switch (rng() % 8) {
+            case 0:
+                text += "==";
+                break;
+            case 1:
+                text += "=";
+                break;
+            case 2:
+                text += "\n  ";
+                break;
+            case 3:
+                text += "\r\n";
+                break;
+            case 4:
+                text += (rng() % 20 == 0) ? "*" : "\t";
+                break;
+            default:
+                break;
+            }
+        }
+        const size_t maxBytes = rng() % 4 == 0 ? size_t(rng() % 100) : SIZE_MAX;
+        std::string expected, got;
+        size_t expectedUsed = 0, gotUsed = 0;
+        const bool ok = referenceBase64(text, maxBytes, expected, expectedUsed);
+        const bool decoded = io_internal::decodeBase64(
+            reinterpret_cast<const uint8_t*>(text.data()), text.size(), got, maxBytes, &gotUsed);
+        ASSERT_EQ(decoded, ok) << text;
+        ASSERT_EQ(got, expected) << text;
+        ASSERT_EQ(gotUsed, expectedUsed) << text;
+        refused += !ok, limited += ok && maxBytes != SIZE_MAX && expectedUsed < text.size();
+    }
+    EXPECT_GT(refused, 100u); // (the cases are all there)
+    EXPECT_GT(limited, 100u);
 }
