@@ -5,6 +5,7 @@
 // groups, point/vertex/prim/detail attributes); the point attribute definitions (name, size,
 // Houdini type, defaults); then per point x y z w followed by its attribute values. Primitives and
 // anything after the points are not needed for particles and are not read.
+#include "io/BigEndian.h"
 #include "io/ByteReader.h"
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
@@ -175,19 +176,12 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
 namespace {
 void put32(std::string& out, uint32_t v)
 {
-    const uint32_t b = __builtin_bswap32(v);
-    out.append(reinterpret_cast<const char*>(&b), 4);
+    appendBigEndian(out, &v, 1);
 }
 void put16(std::string& out, uint16_t v)
 {
     out += char(v >> 8);
     out += char(v);
-}
-uint32_t bitsOf(float f)
-{
-    uint32_t u;
-    std::memcpy(&u, &f, 4);
-    return u;
 }
 
 /// The file into out (a StreamFile, or BytesSink for the gzip writer, which compresses the whole
