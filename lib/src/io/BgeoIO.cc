@@ -9,6 +9,7 @@
 #include "io/ByteReader.h"
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
+#include "io/GzipStream.h"
 #include "io/StreamFile.h"
 
 #include "util/Memory.h"
@@ -184,8 +185,7 @@ void put16(std::string& out, uint16_t v)
     out += char(v);
 }
 
-/// The file into out (a StreamFile, or BytesSink for the gzip writer, which compresses the whole
-/// file at once).
+/// The file into out (a StreamFile, or a GzipStream for `.bgeo.gz`).
 template <typename Out> void putBgeo(const ParticleSet& ps, Out& out)
 {
     ps.validate();
@@ -234,12 +234,6 @@ template <typename Out> void putBgeo(const ParticleSet& ps, Out& out)
                                            // writes it
 }
 
-struct BytesSink
-{
-    Bytes bytes;
-    void write(const std::string& s) { bytes.insert(bytes.end(), s.begin(), s.end()); }
-};
-
 } // namespace
 
 void writeBgeo(const ParticleSet& ps, io::StreamFile& out)
@@ -247,11 +241,9 @@ void writeBgeo(const ParticleSet& ps, io::StreamFile& out)
     putBgeo(ps, out);
 }
 
-Bytes encodeBgeo(const ParticleSet& ps)
+void writeBgeo(const ParticleSet& ps, io::GzipStream& out)
 {
-    BytesSink sink;
-    putBgeo(ps, sink);
-    return std::move(sink.bytes);
+    putBgeo(ps, out);
 }
 
 } // namespace io_internal

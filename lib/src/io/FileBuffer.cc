@@ -207,22 +207,5 @@ void zlibInflate(const uint8_t* src, size_t srcSize, uint8_t* dst, size_t dstSiz
                          std::string(ret == Z_OK ? "size mismatch" : zError(ret)) + ")");
 }
 
-std::vector<uint8_t> gzipCompress(const uint8_t* data, size_t size, int level)
-{
-    z_stream zs{};
-    if (deflateInit2(&zs, level, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
-        throw OutputError("zlib deflate init failed");
-    std::vector<uint8_t> out(deflateBound(&zs, uLong(size)) + 64);
-    zs.next_in = const_cast<Bytef*>(data);
-    zs.avail_in = uInt(size);
-    zs.next_out = out.data();
-    zs.avail_out = uInt(out.size());
-    const int ret = deflate(&zs, Z_FINISH);
-    deflateEnd(&zs);
-    if (ret != Z_STREAM_END) throw OutputError("gzip compression failed");
-    out.resize(zs.total_out);
-    return out;
-}
-
 } // namespace io_internal
 } // namespace fluidsurf

@@ -60,7 +60,5 @@ std::vector<uint8_t> gunzipPrefix(const uint8_t* data, size_t size, const std::s
 void zlibInflate(const uint8_t* src, size_t srcSize, uint8_t* dst, size_t dstSize,
                  const std::string& source);
 
-std::vector<uint8_t> gzipCompress(const uint8_t* data, size_t size, int level = 6);
-
 } // namespace io_internal
 } // namespace fluidsurf

@@ -11,7 +11,8 @@
 namespace fluidsurf {
 namespace io {
 class StreamFile;
-}
+class GzipStream;
+} // namespace io
 namespace io_internal {
 
 using Bytes = std::vector<uint8_t>;
@@ -36,11 +37,11 @@ ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, st
 ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src,
                           std::string* detail);
 
-/// The whole file (the gzip writer's input).
-Bytes encodeBgeo(const ParticleSet& particles);
 /// Streamed into out, encoded in parallel blocks (StreamFile.h's writeItems): no whole file in
 /// memory. OutputError for what the format cannot hold, before anything is written.
 void writeBgeo(const ParticleSet& particles, io::StreamFile& out);
+/// `.bgeo.gz`: the same bytes through out, compressed on all threads (GzipStream.h).
+void writeBgeo(const ParticleSet& particles, io::GzipStream& out);
 void writeVtkLegacy(const ParticleSet& particles, io::StreamFile& out);
 void writePly(const ParticleSet& particles, io::StreamFile& out);
 void writeXyz(const ParticleSet& particles, io::StreamFile& out);

@@ -4,11 +4,11 @@
 
 #include "io/FileBuffer.h"
 #include "io/Formats.h"
+#include "io/GzipStream.h"
 #include "io/StreamFile.h"
 #include "io/TextParse.h"
 
 #include <fluidsurf/Error.h>
-#include <fluidsurf/io/AtomicFile.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -235,9 +235,11 @@ void writeParticles(const ParticleSet& particles, const std::string& path,
         if (format == ParticleFormat::VdbPoints) {
             writeVdbPoints(particles, path, options.compress);
         } else if (format == ParticleFormat::Bgeo && endsWith(lower(path), ".gz")) {
-            const Bytes bytes = encodeBgeo(particles);
-            const Bytes zipped = gzipCompress(bytes.data(), bytes.size());
-            writeFileAtomic(path, zipped.data(), zipped.size());
+            io::StreamFile out(path);
+            io::GzipStream zipped(out);
+            writeBgeo(particles, zipped);
+            zipped.finish();
+            out.commit();
         } else {
             // streamed: the temporary goes if anything fails on the way
             io::StreamFile out(path);
