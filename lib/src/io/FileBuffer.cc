@@ -111,90 +111,85 @@ bool isGzip(const uint8_t* data, size_t size)
     return size >= 2 && data[0] == 0x1f && data[1] == 0x8b;
 }
 
-namespace {
-/// Inflate until the stream ends or `stop` bytes are out (complete: the stream ended); past
-/// maxOutput without ending is an error. With checkTail, the rest of the stream is inflated into
-/// a scratch buffer and dropped, so that zlib reaches the CRC (a flipped byte inside the data is
-/// an error, not different particles); more than checkTail bytes past stop is an error too.
-std::vector<uint8_t> inflateGzip(const uint8_t* data, size_t size, const std::string& source,
-                                 size_t maxOutput, size_t stop, bool& complete,
-                                 size_t checkTail = 0)
+GzipInflater::GzipInflater(const uint8_t* data, size_t size, const std::string& source)
+    : mData(data), mSize(size), mSource(source), mStream(new z_stream{})
 {
-    complete = false;
-    z_stream zs{};
-    if (inflateInit2(&zs, 15 + 16) != Z_OK) throw InputError(source + ": zlib init failed");
-    std::vector<uint8_t> out, scratch;
-    out.resize(std::min(std::max<size_t>(size * 3, 1 << 16), std::max<size_t>(stop, 1)));
-    zs.next_in = const_cast<Bytef*>(data);
-    size_t consumed = 0;
-    int ret = Z_OK;
-    // zlib's avail_in is 32-bit: feed large inputs in slices.
-    while (true) {
-        if (zs.avail_in == 0 && consumed < size) {
-            const size_t slice = std::min<size_t>(size - consumed, 1u << 30);
-            zs.next_in = const_cast<Bytef*>(data + consumed);
+    if (inflateInit2(mStream.get(), 15 + 16) != Z_OK)
+        throw InputError(source + ": zlib init failed");
+}
+
+GzipInflater::~GzipInflater()
+{
+    inflateEnd(mStream.get());
+}
+
+size_t GzipInflater::read(uint8_t* dst, size_t n)
+{
+    z_stream& zs = *mStream;
+    size_t got = 0;
+    while (got < n && !mEnded) {
+        // zlib's avail_in and avail_out are 32-bit: large inputs and outputs go in slices
+        if (zs.avail_in == 0 && mConsumed < mSize) {
+            const size_t slice = std::min<size_t>(mSize - mConsumed, 1u << 30);
+            zs.next_in = const_cast<Bytef*>(mData + mConsumed);
             zs.avail_in = uInt(slice);
-            consumed += slice;
+            mConsumed += slice;
         }
-        if (zs.total_out >= stop) { // as much as the caller can use
-            if (!checkTail) break;
-            if (zs.total_out - stop > checkTail) {
-                inflateEnd(&zs);
-                throw InputError(source + ": gzip data goes on for more than " +
-                                 std::to_string(checkTail) +
-                                 " bytes past what the header promises (corrupt or a bomb)");
-            }
-            scratch.resize(1 << 16);
-            zs.next_out = scratch.data();
-            zs.avail_out = uInt(scratch.size());
-        } else {
-            if (zs.total_out == out.size()) {
-                if (out.size() >= maxOutput) {
-                    inflateEnd(&zs);
-                    throw InputError(source + ": gzip data expands beyond " +
-                                     std::to_string(maxOutput) + " bytes");
-                }
-                out.resize(std::min({out.size() * 2, maxOutput, stop}));
-            }
-            const size_t room = std::min<size_t>(out.size() - zs.total_out, 1u << 30);
-            zs.next_out = out.data() + zs.total_out;
-            zs.avail_out = uInt(room);
-        }
-        ret = inflate(&zs, Z_NO_FLUSH);
+        const size_t room = std::min<size_t>(n - got, 1u << 30);
+        zs.next_out = dst + got;
+        zs.avail_out = uInt(room);
+        const int ret = inflate(&zs, Z_NO_FLUSH);
+        got += room - zs.avail_out;
+        const size_t at = mConsumed - zs.avail_in; // the next compressed byte
         if (ret == Z_STREAM_END) {
-            complete = true;
-            break;
-        }
-        if (ret != Z_OK && ret != Z_BUF_ERROR) {
-            const std::string msg = zs.msg ? zs.msg : "corrupt data";
-            const size_t at = zs.total_in;
-            inflateEnd(&zs);
-            throw InputError(source + ": gzip stream is corrupt: " + msg + " (at compressed byte " +
-                             std::to_string(at) + ")");
-        }
-        if (ret == Z_BUF_ERROR && zs.avail_in == 0 && consumed >= size) {
-            inflateEnd(&zs);
-            throw InputError(source + ": gzip stream is truncated (ends after " +
-                             std::to_string(size) + " compressed bytes)");
+            // members one after the other (`cat a.gz b.gz`, Python's gzip in pieces) are one
+            // file, as gzip -d reads them; anything else after a member is left alone, as
+            // before
+            if (mSize - at >= 2 && mData[at] == 0x1f && mData[at + 1] == 0x8b)
+                inflateReset(&zs);
+            else
+                mEnded = true;
+        } else if (ret != Z_OK && ret != Z_BUF_ERROR) {
+            throw InputError(mSource +
+                             ": gzip stream is corrupt: " + (zs.msg ? zs.msg : "corrupt data") +
+                             " (at compressed byte " + std::to_string(at) + ")");
+        } else if (ret == Z_BUF_ERROR && zs.avail_in == 0 && mConsumed >= mSize) {
+            throw InputError(mSource + ": gzip stream is truncated (ends after " +
+                             std::to_string(mSize) + " compressed bytes)");
         }
     }
-    out.resize(std::min<size_t>(zs.total_out, out.size()));
-    inflateEnd(&zs);
-    return out;
+    mProduced += got;
+    return got;
 }
-} // namespace
 
-std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string& source,
-                            size_t maxOutput)
+void GzipInflater::skipToEnd(uint64_t limit, uint64_t past)
 {
-    bool complete = false;
-    return inflateGzip(data, size, source, maxOutput, ~size_t(0), complete);
+    // inflated into a scratch buffer and dropped, so that zlib reaches the CRC
+    std::vector<uint8_t> scratch(1 << 16);
+    while (!mEnded) {
+        if (past > limit)
+            throw InputError(mSource + ": gzip data goes on for more than " +
+                             std::to_string(limit) +
+                             " bytes past what the header promises (corrupt or a bomb)");
+        past += read(scratch.data(), scratch.size());
+    }
 }
 
 std::vector<uint8_t> gunzipPrefix(const uint8_t* data, size_t size, const std::string& source,
                                   size_t want, bool& complete, size_t checkTail)
 {
-    return inflateGzip(data, size, source, size_t(1) << 36, want, complete, checkTail);
+    GzipInflater in(data, size, source);
+    std::vector<uint8_t> out(
+        std::min(std::max<size_t>(size * 3, 1 << 16), std::max<size_t>(want, 1)));
+    size_t have = 0;
+    while (have < want && !in.ended()) {
+        if (have == out.size()) out.resize(std::min(out.size() * 2, want));
+        have += in.read(out.data() + have, out.size() - have);
+    }
+    out.resize(have);
+    if (checkTail) in.skipToEnd(checkTail);
+    complete = in.ended();
+    return out;
 }
 
 void zlibInflate(const uint8_t* src, size_t srcSize, uint8_t* dst, size_t dstSize,

@@ -3,8 +3,11 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
+
+struct z_stream_s;
 
 namespace fluidsurf {
 namespace io_internal {
@@ -44,10 +47,34 @@ private:
 
 bool isGzip(const uint8_t* data, size_t size);
 
-/// Inflate a gzip stream (growing the output as data arrives: no size is trusted up front).
-/// maxOutput guards against decompression bombs.
-std::vector<uint8_t> gunzip(const uint8_t* data, size_t size, const std::string& source,
-                            size_t maxOutput = size_t(1) << 36);
+/// A gzip stream inflated as far as its reader asks (no size is trusted up front): a reader
+/// inflates what its header promises, a slice at a time, never a bomb's tail. InputError for a
+/// corrupt or truncated stream, naming the compressed byte.
+class GzipInflater
+{
+public:
+    GzipInflater(const uint8_t* data, size_t size, const std::string& source);
+    ~GzipInflater();
+    GzipInflater(const GzipInflater&) = delete;
+    GzipInflater& operator=(const GzipInflater&) = delete;
+
+    /// The next n bytes into dst; fewer only where the stream ends.
+    size_t read(uint8_t* dst, size_t n);
+    /// The rest inflated and dropped up to the CRC, which zlib then checks (a flipped byte
+    /// inside the data is an error, not different particles). More than limit bytes past what
+    /// the header promises (past of them already read) is an InputError.
+    void skipToEnd(uint64_t limit, uint64_t past = 0);
+    bool ended() const { return mEnded; }
+    uint64_t produced() const { return mProduced; }
+
+private:
+    const uint8_t* mData;
+    size_t mSize, mConsumed = 0;
+    uint64_t mProduced = 0;
+    std::string mSource;
+    std::unique_ptr<z_stream_s> mStream;
+    bool mEnded = false;
+};
 
 /// The first `want` bytes of a gzip stream (fewer when it ends sooner; complete says whether the
 /// whole stream fitted): a reader inflates only what its header promises, never a bomb's tail.

@@ -5,6 +5,7 @@
 #include <fluidsurf/ParticleSet.h>
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,12 @@ ParticleSet readVtkLegacy(const uint8_t* data, size_t size, const std::string& s
 ParticleSet readVtkXml(const uint8_t* data, size_t size, const std::string& src,
                        std::string* detail);
 ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+class OpenFile;
+/// An uncompressed BGEO read by all threads from where its points lie, a slice each, with no
+/// buffer of the whole file; nullopt for a gzip file, or one whose header or points are not all
+/// there (readBgeo of the whole file then names what is wrong).
+std::optional<ParticleSet> readBgeo(const OpenFile& file, const std::string& src,
+                                    std::string* detail);
 ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 /// A raw .xyz whose size is not a multiple of 12 (and whose first bytes are not text): InputError.
 void checkXyzSize(const uint8_t* head, size_t headBytes, uint64_t fileBytes,
@@ -29,7 +36,6 @@ void checkXyzSize(const uint8_t* head, size_t headBytes, uint64_t fileBytes,
 ParticleSet readXyz(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 /// Whether a .xyz whose first bytes are these is text (read as CSV), not raw float32.
 bool isTextXyz(const uint8_t* head, size_t headBytes);
-class OpenFile;
 /// A raw .xyz (checkXyzSize passed) straight from the file into the positions.
 ParticleSet readXyz(const OpenFile& file, std::string* detail);
 ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail);

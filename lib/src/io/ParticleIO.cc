@@ -209,6 +209,19 @@ ParticleSet readParticles(const std::string& path, const ReadOptions& options, R
                            info);
         }
     }
+    if (format == ParticleFormat::Bgeo) {
+        const OpenFile file(path);
+        uint8_t head[4096];
+        const size_t n = size_t(std::min<uint64_t>(file.size(), sizeof head));
+        file.readAt(0, head, n);
+        if (n > 0) {
+            checkContent(head, n, format, path);
+            std::string detail;
+            if (std::optional<ParticleSet> set = readBgeo(file, path, &detail))
+                return checked(std::move(*set), format, path, detail, size_t(file.size()), options,
+                               info);
+        }
+    }
     // A raw .xyz of the wrong size is refused from its first bytes, before the rest is read.
     const std::vector<uint8_t> data =
         readFile(path, format == ParticleFormat::Xyz
