@@ -17,19 +17,25 @@ class GzipStream;
 namespace io_internal {
 
 using Bytes = std::vector<uint8_t>;
+class OpenFile;
 
 ParticleSet readVtkLegacy(const uint8_t* data, size_t size, const std::string& src,
                           std::string* detail);
 ParticleSet readVtkXml(const uint8_t* data, size_t size, const std::string& src,
                        std::string* detail);
 ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
-class OpenFile;
 /// An uncompressed BGEO read by all threads from where its points lie, a slice each, with no
 /// buffer of the whole file; nullopt for a gzip file, or one whose header or points are not all
 /// there (readBgeo of the whole file then names what is wrong).
 std::optional<ParticleSet> readBgeo(const OpenFile& file, const std::string& src,
                                     std::string* detail);
 ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+/// A binary PLY whose vertices follow elements of fixed size only, read by all threads from
+/// where they lie, a slice each, with no buffer of the whole file; nullopt otherwise, or where
+/// the header or the vertices are not all there (readPly of the whole file then names what is
+/// wrong).
+std::optional<ParticleSet> readPly(const OpenFile& file, const std::string& src,
+                                   std::string* detail);
 /// A raw .xyz whose size is not a multiple of 12 (and whose first bytes are not text): InputError.
 void checkXyzSize(const uint8_t* head, size_t headBytes, uint64_t fileBytes,
                   const std::string& src);

@@ -209,7 +209,8 @@ ParticleSet readParticles(const std::string& path, const ReadOptions& options, R
                            info);
         }
     }
-    if (format == ParticleFormat::Bgeo) {
+    if (format == ParticleFormat::Bgeo || format == ParticleFormat::Ply) {
+        // binary records from where they lie, a slice a thread: no buffer of the whole file
         const OpenFile file(path);
         uint8_t head[4096];
         const size_t n = size_t(std::min<uint64_t>(file.size(), sizeof head));
@@ -217,7 +218,10 @@ ParticleSet readParticles(const std::string& path, const ReadOptions& options, R
         if (n > 0) {
             checkContent(head, n, format, path);
             std::string detail;
-            if (std::optional<ParticleSet> set = readBgeo(file, path, &detail))
+            std::optional<ParticleSet> set = format == ParticleFormat::Bgeo
+                                                 ? readBgeo(file, path, &detail)
+                                                 : readPly(file, path, &detail);
+            if (set)
                 return checked(std::move(*set), format, path, detail, size_t(file.size()), options,
                                info);
         }
