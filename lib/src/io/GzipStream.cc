@@ -5,13 +5,12 @@
 
 #include "io/StreamFile.h"
 
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
-#include <tbb/task_group.h>
 
 #include <zlib.h>
 
 #include <algorithm>
-#include <atomic>
 
 namespace fluidsurf {
 namespace io {
@@ -53,87 +52,63 @@ std::string deflatePiece(const std::string& piece, const char* dictionary, size_
 }
 } // namespace
 
-struct GzipStream::Piece
-{
-    std::string in, dictionary, out;
-    uint32_t crc = 0;
-    std::atomic<bool> done{false};
-    tbb::task_group task;
-};
-
 GzipStream::GzipStream(StreamFile& out, int level)
     : mOut(out), mLevel(level),
-      mMaxFlight(size_t(std::max(2, 2 * tbb::this_task_arena::max_concurrency())))
+      mBatchPieces(size_t(std::max(2, 2 * tbb::this_task_arena::max_concurrency())))
 {
     // as zlib writes it: no name, no time, the extra flags of the level, Unix
     const char extra = level == 9 ? 2 : (level < 2 ? 4 : 0);
     const char head[10] = {'\x1f', '\x8b', 8, 0, 0, 0, 0, 0, extra, 3};
     mOut.write(head, sizeof head);
-    mFilling.reserve(kPiece);
-}
-
-GzipStream::~GzipStream()
-{
-    for (const std::unique_ptr<Piece>& piece : mFlight) {
-        try {
-            piece->task.wait();
-        } catch (...) {
-        }
-    }
+    mBatch.emplace_back();
+    mBatch.back().reserve(kPiece);
 }
 
 void GzipStream::write(const void* data, size_t size)
 {
     const char* p = static_cast<const char*>(data);
     while (size > 0) {
-        if (mFilling.size() == kPiece) submit(false); // full, and more comes: not the last
-        const size_t take = std::min(size, kPiece - mFilling.size());
-        mFilling.append(p, take);
+        if (mBatch.back().size() == kPiece) { // full, and more comes: not the last piece
+            if (mBatch.size() == mBatchPieces) compressBatch(false);
+            mBatch.emplace_back();
+            mBatch.back().reserve(kPiece);
+        }
+        std::string& piece = mBatch.back();
+        const size_t take = std::min(size, kPiece - piece.size());
+        piece.append(p, take);
         p += take;
         size -= take;
     }
 }
 
-void GzipStream::submit(bool last)
+void GzipStream::compressBatch(bool last)
 {
-    auto piece = std::make_unique<Piece>();
-    piece->in.swap(mFilling);
-    piece->dictionary.swap(mWindow);
-    const std::string& in = piece->in;
-    mWindow.assign(in, in.size() - std::min(in.size(), kWindow), std::string::npos);
-    mFilling.reserve(kPiece);
-    Piece& p = *piece;
-    const int level = mLevel;
-    p.task.run([&p, level, last] {
-        p.out = deflatePiece(p.in, p.dictionary.data(), p.dictionary.size(), level, last);
-        p.crc = uint32_t(crc32(0, reinterpret_cast<const Bytef*>(p.in.data()), uInt(p.in.size())));
-        p.done.store(true, std::memory_order_release);
+    const size_t n = mBatch.size();
+    std::vector<std::string> deflated(n);
+    std::vector<uint32_t> crcs(n);
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        const std::string& before = i == 0 ? mWindow : mBatch[i - 1];
+        const size_t reach = std::min(before.size(), kWindow);
+        deflated[i] = deflatePiece(mBatch[i], before.data() + before.size() - reach, reach, mLevel,
+                                   last && i + 1 == n);
+        crcs[i] = uint32_t(
+            crc32(0, reinterpret_cast<const Bytef*>(mBatch[i].data()), uInt(mBatch[i].size())));
     });
-    mFlight.push_back(std::move(piece));
-    // what is done goes out; more than mMaxFlight in flight waits for the oldest
-    while (!mFlight.empty() && retire(mFlight.size() > mMaxFlight)) {
+    for (size_t i = 0; i < n; ++i) {
+        mOut.write(deflated[i]);
+        mCrc = uint32_t(crc32_combine(mCrc, crcs[i], z_off_t(mBatch[i].size())));
+        mLength += mBatch[i].size();
     }
-}
-
-bool GzipStream::retire(bool wait)
-{
-    Piece& piece = *mFlight.front();
-    if (!wait && !piece.done.load(std::memory_order_acquire)) return false;
-    piece.task.wait(); // (rethrows the task's error)
-    mOut.write(piece.out);
-    mCrc = uint32_t(crc32_combine(mCrc, piece.crc, z_off_t(piece.in.size())));
-    mLength += piece.in.size();
-    mFlight.pop_front();
-    return true;
+    const std::string& tail = mBatch.back();
+    mWindow.assign(tail, tail.size() - std::min(tail.size(), kWindow), std::string::npos);
+    mBatch.clear();
 }
 
 void GzipStream::finish()
 {
     if (mFinished) return;
     mFinished = true;
-    submit(true);
-    while (!mFlight.empty())
-        retire(true);
+    compressBatch(true);
     char trailer[8];
     for (int b = 0; b < 4; ++b) {
         trailer[b] = char(mCrc >> (8 * b));
