@@ -7,7 +7,12 @@
 #include "io/StreamFile.h"
 #include "io/TextParse.h"
 
+#include "util/Memory.h"
+
 #include <fluidsurf/Error.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 namespace fluidsurf {
 namespace io_internal {
@@ -192,8 +197,13 @@ private:
         if (mBinary) {
             const size_t n = in.checkedCount(count, vtkTypeSize(t), what);
             const uint8_t* p = in.take(n * vtkTypeSize(t), what);
-            out.resize(n);
-            convertBinary(p, n, t, out.data());
+            util::resizeInParallel(out, n);
+            const size_t s = vtkTypeSize(t);
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 15),
+                              [&](const tbb::blocked_range<size_t>& r) {
+                                  convertBinary(p + r.begin() * s, r.size(), t,
+                                                out.data() + r.begin());
+                              });
         } else {
             const size_t n = in.checkedCount(count, 1, what); // >= 1 byte per ASCII value
             out.resize(n);
@@ -266,13 +276,20 @@ private:
         const VtkType t = typeOf(w[2]);
         const uint64_t values = mulChecked(in, n, 3, "POINTS");
         if (mBinary && t == VtkType::Float32) {
-            // Fast path for the common case: big-endian float32 straight into positions.
+            // Fast path for the common case: big-endian float32 straight into positions, on all
+            // threads.
             const size_t count = in.checkedCount(n, 12, "points");
             const uint8_t* p = in.take(count * 12, "points");
-            mSet.positions.resize(count);
-            float* out = &mSet.positions[0].x;
-            for (size_t i = 0; i < count * 3; ++i)
-                out[i] = loadAs<float>(p + 4 * i, true);
+            util::resizeInParallel(mSet.positions, count);
+            tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 15),
+                              [&](const tbb::blocked_range<size_t>& r) {
+                                  for (size_t i = r.begin(); i != r.end(); ++i) {
+                                      const uint8_t* q = p + 12 * i;
+                                      mSet.positions[i] =
+                                          Vec3f(loadAs<float>(q, true), loadAs<float>(q + 4, true),
+                                                loadAs<float>(q + 8, true));
+                                  }
+                              });
         } else {
             std::vector<double> v;
             readValues(values, t, "points", v);
@@ -330,9 +347,9 @@ private:
         if (!keep) {
             skipValues(count, t, what);
         } else if (isFloatType(t)) {
-            std::vector<double> v;
+            std::vector<float> v; // float(value), as through a double before
             readValues(count, t, what, v);
-            mSet.addFloat(name, comps, std::vector<float>(v.begin(), v.end()));
+            mSet.addFloat(name, comps, std::move(v));
         } else {
             std::vector<int64_t> v;
             readValues(count, t, what, v);
