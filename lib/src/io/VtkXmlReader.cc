@@ -6,9 +6,15 @@
 #include "io/TextParse.h"
 #include "io/XmlScan.h"
 
+#include "util/Memory.h"
+
 #include <fluidsurf/Error.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <set>
 
 namespace fluidsurf {
@@ -72,20 +78,22 @@ public:
                 const std::string fmt = attr(a.tag, "format", "ascii");
                 if (how.find(fmt) == std::string::npos) how += (how.empty() ? "" : ", ") + fmt;
                 const int comps = components(a);
-                std::vector<double> fv;
+                std::vector<float> fv; // float(value), as through a double before
                 std::vector<int64_t> iv;
                 const ScalarType t = typeOf(a);
                 decodeArray(a, uint64_t(n) * uint64_t(comps), t, fv, iv);
                 if (a.role == ArrayInfo::Points) {
                     if (comps != 3) in.failAt(a.tag.begin, "Points array must have 3 components");
-                    piece.positions.resize(n);
-                    for (size_t i = 0; i < n; ++i)
-                        piece.positions[i] =
-                            Vec3f(float(fv[3 * i]), float(fv[3 * i + 1]), float(fv[3 * i + 2]));
+                    util::resizeInParallel(piece.positions, n);
+                    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 15),
+                                      [&](const tbb::blocked_range<size_t>& r) {
+                                          for (size_t i = r.begin(); i != r.end(); ++i)
+                                              piece.positions[i] =
+                                                  Vec3f(fv[3 * i], fv[3 * i + 1], fv[3 * i + 2]);
+                                      });
                     havePoints = true;
                 } else if (t.isFloat) {
-                    piece.addFloat(attr(a.tag, "Name"), comps,
-                                   std::vector<float>(fv.begin(), fv.end()));
+                    piece.addFloat(attr(a.tag, "Name"), comps, std::move(fv));
                 } else {
                     piece.addInt(attr(a.tag, "Name"), comps, std::move(iv));
                 }
@@ -293,7 +301,7 @@ private:
     }
 
     void decodeArray(const ArrayInfo& a, uint64_t count, const ScalarType& t,
-                     std::vector<double>& fv, std::vector<int64_t>& iv)
+                     std::vector<float>& fv, std::vector<int64_t>& iv)
     {
         const std::string fmt = attr(a.tag, "format", "ascii");
         if (count > (uint64_t(1) << 40) / t.size) in.failAt(a.tag.begin, "absurd array size");
@@ -305,7 +313,7 @@ private:
             for (size_t i = 0; i < n; ++i) {
                 const double v = readAsciiNumber(text, "DataArray values");
                 if (t.isFloat)
-                    fv[i] = v;
+                    fv[i] = float(v);
                 else
                     iv[i] = int64_t(v);
             }
@@ -339,42 +347,62 @@ private:
                                            std::to_string(p.size()) + " bytes) cannot inflate to " +
                                            std::to_string(bytes) + " bytes");
             raw.resize(bytes);
-            size_t src = mHeaderSize * (3 + size_t(blocks)), dst = 0;
-            for (uint64_t b = 0; b < blocks; ++b) {
-                const size_t csize = size_t(headerValue(h + mHeaderSize * (3 + b)));
+            // the blocks are independent: inflated on all threads, each where the block table
+            // puts it; where any fails, the first that does names the error, as in order
+            std::vector<size_t> src(size_t(blocks) + 1, mHeaderSize * (3 + size_t(blocks)));
+            for (size_t b = 0; b < size_t(blocks); ++b)
+                src[b + 1] = src[b] + size_t(headerValue(h + mHeaderSize * (3 + b)));
+            const std::string source = mSrc + " (DataArray '" + attr(a.tag, "Name") + "')";
+            auto inflateBlock = [&](size_t b) {
                 const size_t usize = size_t(b + 1 == blocks && lastSize ? lastSize : blockSize);
-                zlibInflate(h + src, csize, reinterpret_cast<uint8_t*>(&raw[dst]), usize,
-                            mSrc + " (DataArray '" + attr(a.tag, "Name") + "')");
-                src += csize;
-                dst += usize;
-            }
+                zlibInflate(h + src[b], src[b + 1] - src[b],
+                            reinterpret_cast<uint8_t*>(&raw[b * size_t(blockSize)]), usize, source);
+            };
+            std::atomic<bool> failed{false};
+            tbb::parallel_for(size_t(0), size_t(blocks), [&](size_t b) {
+                try {
+                    inflateBlock(b);
+                } catch (const InputError&) {
+                    failed = true;
+                }
+            });
+            for (size_t b = 0; failed && b < size_t(blocks); ++b)
+                inflateBlock(b); // throws at the first bad block
             data = reinterpret_cast<const uint8_t*>(raw.data());
         }
-        (t.isFloat ? fv.resize(size_t(count)) : iv.resize(size_t(count)));
-        for (size_t i = 0; i < size_t(count); ++i) {
-            const uint8_t* q = data + i * t.size;
-            if (t.isFloat) {
-                fv[i] = t.size == 4 ? double(loadAs<float>(q, mBigEndian))
-                                    : loadAs<double>(q, mBigEndian);
-                continue;
-            }
-            int64_t v = 0;
-            switch (t.size) {
-            case 1:
-                v = t.isSigned ? int8_t(*q) : *q;
-                break;
-            case 2:
-                v = t.isSigned ? loadAs<int16_t>(q, mBigEndian) : loadAs<uint16_t>(q, mBigEndian);
-                break;
-            case 4:
-                v = t.isSigned ? loadAs<int32_t>(q, mBigEndian) : loadAs<uint32_t>(q, mBigEndian);
-                break;
-            default:
-                v = int64_t(loadAs<uint64_t>(q, mBigEndian));
-                break;
-            }
-            iv[i] = v;
+        (t.isFloat ? util::resizeInParallel(fv, size_t(count))
+                   : util::resizeInParallel(iv, size_t(count)));
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, size_t(count), 1 << 15),
+                          [&](const tbb::blocked_range<size_t>& r) {
+                              for (size_t i = r.begin(); i != r.end(); ++i)
+                                  decodeValue(data + i * t.size, t, i, fv, iv);
+                          });
+    }
+
+    void decodeValue(const uint8_t* q, const ScalarType& t, size_t i, std::vector<float>& fv,
+                     std::vector<int64_t>& iv) const
+    {
+        if (t.isFloat) {
+            fv[i] =
+                t.size == 4 ? loadAs<float>(q, mBigEndian) : float(loadAs<double>(q, mBigEndian));
+            return;
         }
+        int64_t v = 0;
+        switch (t.size) {
+        case 1:
+            v = t.isSigned ? int8_t(*q) : *q;
+            break;
+        case 2:
+            v = t.isSigned ? loadAs<int16_t>(q, mBigEndian) : loadAs<uint16_t>(q, mBigEndian);
+            break;
+        case 4:
+            v = t.isSigned ? loadAs<int32_t>(q, mBigEndian) : loadAs<uint32_t>(q, mBigEndian);
+            break;
+        default:
+            v = int64_t(loadAs<uint64_t>(q, mBigEndian));
+            break;
+        }
+        iv[i] = v;
     }
 
     void append(ParticleSet& into, ParticleSet&& piece, size_t p)
