@@ -1,6 +1,7 @@
 // GzipStream.h - a gzip file compressed on all threads as its bytes come (the `.bgeo.gz`
-// writer), with no whole-file buffer. zlib on one thread made 2 MB of `.bgeo.gz` a second per
-// core: 7.3 s and 640 MB for the 13.1M drop's 210 MB, against 0.4 s and 170 MB for `.bgeo`.
+// writer), with no whole-file buffer. zlib takes in about 30 MB a second on one thread: the
+// whole file on one thread was 7.3-8.6 s and 640 MB for the 13.1M drop's 210 MB on 2 cores,
+// against 0.4 s and 170 MB for `.bgeo`.
 #pragma once
 
 #include <cstddef>
