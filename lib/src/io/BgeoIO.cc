@@ -250,8 +250,7 @@ ParticleSet readGzipBgeo(const uint8_t* data, size_t size, const std::string& sr
 std::optional<ParticleSet> readBgeo(const OpenFile& file, const std::string& src,
                                     std::string* detail)
 {
-    std::vector<uint8_t> head(size_t(std::min<uint64_t>(file.size(), uint64_t(1) << 16)));
-    file.readAt(0, head.data(), head.size());
+    const std::vector<uint8_t> head = file.readHead(size_t(1) << 16);
     if (isGzip(head.data(), head.size())) return std::nullopt;
     ByteReader probe(head.data(), head.size(), src);
     Header h;
@@ -264,14 +263,11 @@ std::optional<ParticleSet> readBgeo(const OpenFile& file, const std::string& src
     const size_t n = size_t(h.points);
     if (offset + uint64_t(n) * recordBytes > file.size()) return std::nullopt;
     Points points(h, n);
-    const size_t perSlice = std::max<size_t>(1, (size_t(1) << 20) / recordBytes);
-    tbb::parallel_for(size_t(0), (n + perSlice - 1) / perSlice, [&](size_t s) {
-        const size_t first = s * perSlice, count = std::min(perSlice, n - first);
-        std::vector<uint8_t> records(count * recordBytes);
-        file.readAt(offset + first * recordBytes, records.data(), records.size());
-        for (size_t k = 0; k < count; ++k)
-            points.decodeOne(records.data() + k * recordBytes, first + k);
-    });
+    forRecordSlices(file, offset, n, recordBytes,
+                    [&](size_t first, size_t count, const uint8_t* records) {
+                        for (size_t k = 0; k < count; ++k)
+                            points.decodeOne(records + k * recordBytes, first + k);
+                    });
     if (detail) *detail = "v5, uncompressed";
     return points.finish();
 }

@@ -106,6 +106,13 @@ size_t OpenFile::readSome(uint64_t offset, void* dst, size_t n) const
     }
 }
 
+std::vector<uint8_t> OpenFile::readHead(size_t most) const
+{
+    std::vector<uint8_t> head(size_t(std::min<uint64_t>(mSize, most)));
+    readAt(0, head.data(), head.size());
+    return head;
+}
+
 bool isGzip(const uint8_t* data, size_t size)
 {
     return size >= 2 && data[0] == 0x1f && data[1] == 0x8b;

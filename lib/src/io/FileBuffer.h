@@ -1,6 +1,9 @@
 // FileBuffer.h - whole-file loading and zlib/gzip helpers shared by the readers and writers.
 #pragma once
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -38,12 +41,30 @@ public:
     /// Up to n bytes from `offset` into dst, on this thread; fewer where the file ends. Returns
     /// how many. InputError on an error.
     size_t readSome(uint64_t offset, void* dst, size_t n) const;
+    /// The first bytes, up to most (fewer in a shorter file): where a header is looked for.
+    std::vector<uint8_t> readHead(size_t most) const;
 
 private:
     std::string mPath;
     int mFd = -1;
     uint64_t mSize = 0;
 };
+
+/// count records of recordBytes each, from offset on, read a slice of about 1 MiB by each task
+/// and handed over as slice(first record, records in the slice, their bytes): a binary
+/// reader's records go where they belong with no buffer of the whole file.
+template <typename Slice>
+void forRecordSlices(const OpenFile& file, uint64_t offset, size_t count, size_t recordBytes,
+                     const Slice& slice)
+{
+    const size_t perSlice = std::max<size_t>(1, (size_t(1) << 20) / recordBytes);
+    tbb::parallel_for(size_t(0), (count + perSlice - 1) / perSlice, [&](size_t s) {
+        const size_t first = s * perSlice, n = std::min(perSlice, count - first);
+        std::vector<uint8_t> records(n * recordBytes);
+        file.readAt(offset + first * recordBytes, records.data(), records.size());
+        slice(first, n, records.data());
+    });
+}
 
 bool isGzip(const uint8_t* data, size_t size);
 

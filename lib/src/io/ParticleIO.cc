@@ -193,31 +193,23 @@ ParticleSet readParticles(const std::string& path, const ReadOptions& options, R
     if (format == ParticleFormat::Unknown)
         throw InputError(path + ": unknown particle file type (extensions: .vtk .vtu .vtp .bgeo "
                                 ".bgeo.gz .ply .xyz .csv .txt .npy .vdb)");
-    if (format == ParticleFormat::Xyz) {
-        // raw float32 straight into the positions, read by all threads: no buffer of the whole
-        // file, no copy (a 13.1M-particle frame is 157 MB)
+    if (format == ParticleFormat::Xyz || format == ParticleFormat::Bgeo ||
+        format == ParticleFormat::Ply) {
+        // binary records straight from the file into their arrays, read by all threads: no
+        // buffer of the whole file (a 13.1M-particle frame is 157 MB as raw .xyz)
         const OpenFile file(path);
-        uint8_t head[4096];
-        const size_t n = size_t(std::min<uint64_t>(file.size(), sizeof head));
-        file.readAt(0, head, n);
-        if (n > 0 && !isTextXyz(head, n)) {
-            checkContent(head, n, format, path);
-            checkXyzSize(head, n, file.size(), path);
-            std::string detail;
+        const std::vector<uint8_t> head = file.readHead(4096);
+        const size_t n = head.size();
+        std::string detail;
+        if (format == ParticleFormat::Xyz && n > 0 && !isTextXyz(head.data(), n)) {
+            checkContent(head.data(), n, format, path);
+            checkXyzSize(head.data(), n, file.size(), path);
             ParticleSet set = readXyz(file, &detail);
             return checked(std::move(set), format, path, detail, size_t(file.size()), options,
                            info);
         }
-    }
-    if (format == ParticleFormat::Bgeo || format == ParticleFormat::Ply) {
-        // binary records from where they lie, a slice a thread: no buffer of the whole file
-        const OpenFile file(path);
-        uint8_t head[4096];
-        const size_t n = size_t(std::min<uint64_t>(file.size(), sizeof head));
-        file.readAt(0, head, n);
-        if (n > 0) {
-            checkContent(head, n, format, path);
-            std::string detail;
+        if (format != ParticleFormat::Xyz && n > 0) {
+            checkContent(head.data(), n, format, path);
             std::optional<ParticleSet> set = format == ParticleFormat::Bgeo
                                                  ? readBgeo(file, path, &detail)
                                                  : readPly(file, path, &detail);

@@ -217,8 +217,7 @@ ParticleSet readPly(const uint8_t* data, size_t size, const std::string& src, st
 std::optional<ParticleSet> readPly(const OpenFile& file, const std::string& src,
                                    std::string* detail)
 {
-    std::vector<uint8_t> head(size_t(std::min<uint64_t>(file.size(), uint64_t(1) << 16)));
-    file.readAt(0, head.data(), head.size());
+    const std::vector<uint8_t> head = file.readHead(size_t(1) << 16);
     ByteReader in(head.data(), head.size(), src);
     PlyHeader header;
     const PlyElement* vertex = nullptr;
@@ -249,14 +248,10 @@ std::optional<ParticleSet> readPly(const OpenFile& file, const std::string& src,
     const bool be = header.format == PlyFormat::BigEndian;
     const size_t n = size_t(vertex->count), stride = layout->stride;
     Vertices vertices(*layout, n);
-    const size_t perSlice = std::max<size_t>(1, (size_t(1) << 20) / stride);
-    tbb::parallel_for(size_t(0), (n + perSlice - 1) / perSlice, [&](size_t s) {
-        const size_t first = s * perSlice, count = std::min(perSlice, n - first);
-        std::vector<uint8_t> records(count * stride);
-        file.readAt(at + first * stride, records.data(), records.size());
+    forRecordSlices(file, at, n, stride, [&](size_t first, size_t count, const uint8_t* records) {
         for (size_t i = first; i < first + count; ++i)
             vertices.fillOne(i, [&](size_t v, size_t k) {
-                return loadPlyNumber(records.data() + (v - first) * stride + layout->offset[k],
+                return loadPlyNumber(records + (v - first) * stride + layout->offset[k],
                                      vertex->props[k].type, be);
             });
     });
