@@ -99,16 +99,26 @@ public:
     /// a binary file mistaken for text cannot make us scan megabytes for a header line.
     std::string line(const char* what, size_t maxLength = 4096)
     {
+        size_t len;
+        const size_t start = lineVia([this](size_t i) { return mData[i]; }, what, len, maxLength);
+        return std::string(reinterpret_cast<const char*>(mData + start), len);
+    }
+    /// line() over bytes that at(offset) gives: a cursor over a file not in memory (FileCursor)
+    /// keeps its bounds here and finds its lines by the same rules, with the same messages.
+    /// Returns where the line starts; len: its length without the terminator.
+    template <typename At>
+    size_t lineVia(const At& at, const char* what, size_t& len, size_t maxLength = 4096)
+    {
         if (atEnd()) fail(std::string("file ends before ") + what);
         size_t start = mPos, end = mPos;
-        while (end < mSize && mData[end] != '\n') {
+        while (end < mSize && at(end) != '\n') {
             if (end - start > maxLength) failAt(start, std::string("line too long in ") + what);
             ++end;
         }
         mPos = end < mSize ? end + 1 : end;
-        size_t len = end - start;
-        if (len > 0 && mData[start + len - 1] == '\r') --len;
-        return std::string(reinterpret_cast<const char*>(mData + start), len);
+        len = end - start;
+        if (len > 0 && at(start + len - 1) == '\r') --len;
+        return start;
     }
 
 private:

@@ -21,6 +21,11 @@ class OpenFile;
 
 ParticleSet readVtkLegacy(const uint8_t* data, size_t size, const std::string& src,
                           std::string* detail);
+/// A binary legacy VTK read from where its sections lie, its values by all threads with no
+/// buffer of the whole file; nullopt for an ASCII file (parsed from memory). The same values and
+/// messages as the file in memory.
+std::optional<ParticleSet> readVtkLegacy(const OpenFile& file, const std::string& src,
+                                         std::string* detail);
 ParticleSet readVtkXml(const uint8_t* data, size_t size, const std::string& src,
                        std::string* detail);
 ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
@@ -46,6 +51,8 @@ bool isTextXyz(const uint8_t* head, size_t headBytes);
 ParticleSet readXyz(const OpenFile& file, std::string* detail);
 ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+/// The array read by all threads from where it lies in the file: the same values and messages.
+ParticleSet readNpy(const OpenFile& file, const std::string& src, std::string* detail);
 ParticleSet readVdbPoints(const uint8_t* data, size_t size, const std::string& src,
                           std::string* detail);
 

@@ -1,6 +1,10 @@
 // NpyReader.cc - NumPy .npy arrays of shape (N, 3), float32 or float64, either byte order,
-// C or Fortran order (format versions 1.0, 2.0 and 3.0).
+// C or Fortran order (format versions 1.0, 2.0 and 3.0). A file is read from where its array lies,
+// on all threads, with no copy of the whole file.
+#include "io/FileCursor.h"
 #include "io/TextParse.h"
+
+#include "util/Memory.h"
 
 #include <fluidsurf/Error.h>
 
@@ -34,19 +38,18 @@ std::string dictValue(const std::string& h, const std::string& key)
         --b;
     return v.substr(a, b - a);
 }
-} // namespace
 
-ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+/// In: a ByteReader over the file in memory or a FileCursor over the file (the same messages).
+template <typename In> ParticleSet readNpyFrom(In& in, std::string* detail)
 {
-    ByteReader in(data, size, src);
-    if (size < 10 || std::memcmp(data, "\x93NUMPY", 6) != 0)
+    if (in.size() < 10) in.failAt(0, "not a NumPy .npy file (missing \\x93NUMPY magic)");
+    if (std::memcmp(in.take(6, "magic"), "\x93NUMPY", 6) != 0)
         in.failAt(0, "not a NumPy .npy file (missing \\x93NUMPY magic)");
-    in.skip(6, "magic");
     const uint8_t major = *in.take(1, "version");
     in.skip(1, "version");
     if (major < 1 || major > 3) in.failAt(6, "unsupported .npy version " + std::to_string(major));
-    const size_t headerLen = major == 1 ? in.read<uint16_t>(false, "header length")
-                                        : in.read<uint32_t>(false, "header length");
+    const size_t headerLen = major == 1 ? in.template read<uint16_t>(false, "header length")
+                                        : in.template read<uint32_t>(false, "header length");
     const uint8_t* hp = in.take(headerLen, "header");
     const std::string h(reinterpret_cast<const char*>(hp), headerLen);
     const std::string descr = dictValue(h, "descr");
@@ -89,19 +92,35 @@ ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, st
         in.failAt(10, "array shape " + shape.substr(0, 40) + " is not (N, 3)");
     const uint64_t n = parseCount(in, dims[0], "row count");
     const size_t rows = in.checkedCount(n, 3 * item, "rows");
-    const uint8_t* p = in.take(rows * 3 * item, "array data");
     ParticleSet set;
-    set.positions.resize(rows);
-    for (size_t i = 0; i < rows; ++i)
-        for (int c = 0; c < 3; ++c) {
-            const size_t k = fortran ? size_t(c) * rows + i : i * 3 + size_t(c);
-            set.positions[i][c] =
-                item == 4 ? loadAs<float>(p + 4 * k, big) : float(loadAs<double>(p + 8 * k, big));
+    util::resizeInParallel(set.positions, rows);
+    // value k of the array is row k / 3, axis k % 3 (C order) or axis k / rows, row k % rows
+    records(in, 3 * rows, item, "array data", [&](size_t first, size_t n, const uint8_t* p) {
+        for (size_t k = first; k != first + n; ++k, p += item) {
+            const float v = item == 4 ? loadAs<float>(p, big) : float(loadAs<double>(p, big));
+            if (fortran)
+                set.positions[k % rows][int(k / rows)] = v;
+            else
+                set.positions[k / 3][int(k % 3)] = v;
         }
+    });
     if (detail)
         *detail =
             std::string(item == 4 ? "float32" : "float64") + (fortran ? ", Fortran order" : "");
     return set;
+}
+} // namespace
+
+ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+{
+    ByteReader in(data, size, src);
+    return readNpyFrom(in, detail);
+}
+
+ParticleSet readNpy(const OpenFile& file, const std::string& src, std::string* detail)
+{
+    FileCursor in(file, src);
+    return readNpyFrom(in, detail);
 }
 
 } // namespace io_internal

@@ -194,7 +194,8 @@ ParticleSet readParticles(const std::string& path, const ReadOptions& options, R
         throw InputError(path + ": unknown particle file type (extensions: .vtk .vtu .vtp .bgeo "
                                 ".bgeo.gz .ply .xyz .csv .txt .npy .vdb)");
     if (format == ParticleFormat::Xyz || format == ParticleFormat::Bgeo ||
-        format == ParticleFormat::Ply) {
+        format == ParticleFormat::Ply || format == ParticleFormat::VtkLegacy ||
+        format == ParticleFormat::Npy) {
         // binary records straight from the file into their arrays, read by all threads: no
         // buffer of the whole file (a 13.1M-particle frame is 157 MB as raw .xyz)
         const OpenFile file(path);
@@ -210,9 +211,11 @@ ParticleSet readParticles(const std::string& path, const ReadOptions& options, R
         }
         if (format != ParticleFormat::Xyz && n > 0) {
             checkContent(head.data(), n, format, path);
-            std::optional<ParticleSet> set = format == ParticleFormat::Bgeo
-                                                 ? readBgeo(file, path, &detail)
-                                                 : readPly(file, path, &detail);
+            std::optional<ParticleSet> set =
+                format == ParticleFormat::Bgeo  ? readBgeo(file, path, &detail)
+                : format == ParticleFormat::Ply ? readPly(file, path, &detail)
+                : format == ParticleFormat::Npy ? readNpy(file, path, &detail)
+                                                : readVtkLegacy(file, path, &detail);
             if (set)
                 return checked(std::move(*set), format, path, detail, size_t(file.size()), options,
                                info);

@@ -76,15 +76,16 @@ inline void expectLineEnd(ByteReader& in, const char* what)
     in.seek(p < in.size() ? p + 1 : p);
 }
 
-/// Multiply counts from a header, failing (instead of wrapping) on absurd values.
-inline uint64_t mulChecked(const ByteReader& in, uint64_t a, uint64_t b, const char* what)
+/// Multiply counts from a header, failing (instead of wrapping) on absurd values. In: a
+/// ByteReader or a cursor like it (FileCursor).
+template <typename In> uint64_t mulChecked(const In& in, uint64_t a, uint64_t b, const char* what)
 {
     if (b != 0 && a > (uint64_t(1) << 62) / b) in.fail(std::string("absurd size in ") + what);
     return a * b;
 }
 
 /// Parse a non-negative count word from a header.
-inline uint64_t parseCount(const ByteReader& in, const std::string& word, const char* what)
+template <typename In> uint64_t parseCount(const In& in, const std::string& word, const char* what)
 {
     int64_t v;
     if (!parseInt(word.data(), word.data() + word.size(), v) || v < 0)

@@ -113,6 +113,55 @@ TEST(Npy, WrongShapeOrTypeNamed)
               std::string::npos);
 }
 
+TEST(Npy, FilesAreReadFromWhereTheArrayLies)
+{
+    // 200,003 rows: several slices of the file, and in Fortran order a slice holds the end of
+    // one axis and the start of the next. Every value differs.
+    const size_t n = 200003;
+    const auto value = [](size_t i, int c) { return double(i) * 0.125 + c * 1e6 + 1.0 / 3; };
+    TempDir dir;
+    for (const bool fortran : {false, true})
+        for (const bool wide : {false, true})
+            for (const bool big : {false, true}) {
+                SCOPED_TRACE(std::string(fortran ? "Fortran" : "C") + (wide ? " f8" : " f4") +
+                             (big ? " big-endian" : ""));
+                ByteBuilder a;
+                for (size_t k = 0; k < 3 * n; ++k) {
+                    const size_t i = fortran ? k % n : k / 3;
+                    const int c = int(fortran ? k / n : k % 3);
+                    if (wide)
+                        big ? a.be(value(i, c)) : a.le(value(i, c));
+                    else
+                        big ? a.be(float(value(i, c))) : a.le(float(value(i, c)));
+                }
+                const std::string bytes =
+                    npy(std::string(big ? ">" : "<") + (wide ? "f8" : "f4"), fortran,
+                        "(" + std::to_string(n) + ", 3)", a.s, fortran ? 2 : 1);
+                writeFile(dir.path("a.npy"), bytes);
+                const ParticleSet ps = io::readParticles(dir.path("a.npy"));
+                ASSERT_EQ(ps.size(), n);
+                size_t bad = 0;
+                for (size_t i = 0; i < n; ++i)
+                    for (int c = 0; c < 3; ++c)
+                        bad += ps.positions[i][c] != float(value(i, c));
+                EXPECT_EQ(bad, 0u);
+                // cut inside the last value: the message the same bytes give from memory
+                const std::string cut = bytes.substr(0, bytes.size() - 3);
+                writeFile(dir.path("cut.npy"), cut);
+                std::string fromFile;
+                try {
+                    io::readParticles(dir.path("cut.npy"));
+                } catch (const InputError& e) {
+                    fromFile = e.what();
+                }
+                const std::string fromMemory = readError(cut, ParticleFormat::Npy);
+                ASSERT_NE(fromMemory.find("header promises 200003 rows"), std::string::npos)
+                    << fromMemory;
+                EXPECT_EQ(fromFile.substr(fromFile.find(": ")),
+                          fromMemory.substr(fromMemory.find(": ")));
+            }
+}
+
 TEST(Xyz, FilesAreReadByChunksStraightIntoThePositions)
 {
     // A raw .xyz file is read by all threads in 4 MiB chunks into the positions: 1,000,003
