@@ -5,9 +5,15 @@
 // header the first three columns are x, y, z and the rest "col3", "col4", ...
 #include "io/TextParse.h"
 
+#include "util/Memory.h"
+
 #include <fluidsurf/Error.h>
 
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
 #include <charconv>
+#include <cstring>
 
 namespace fluidsurf {
 namespace io_internal {
@@ -70,21 +76,163 @@ int axisOf(const std::string& name)
     return -1;
 }
 
+/// The data lines after the header, cut into pieces of about 1 MiB at line ends and parsed by
+/// all threads: each piece's rows as floats (float(value), as through a double before), its
+/// line count, and its first error. The first error in the file is the one named.
+class CsvRows
+{
+public:
+    static constexpr size_t kMaxLine = size_t(1) << 20; // ByteReader::line's limit, as before
+
+    CsvRows(const ByteReader& in, size_t begin, char delim, size_t columns)
+        : mIn(in), mDelim(delim), mColumns(columns)
+    {
+        const uint8_t* d = in.data();
+        const size_t size = in.size();
+        for (size_t at = begin; at < size;) {
+            size_t end = std::min(size, at + (size_t(1) << 20));
+            if (end < size) {
+                const void* nl = std::memchr(d + end, '\n', size - end);
+                end = nl ? size_t(static_cast<const uint8_t*>(nl) - d) + 1 : size;
+            }
+            mPieces.emplace_back();
+            mPieces.back().begin = at, mPieces.back().end = end;
+            at = end;
+        }
+        tbb::parallel_for(size_t(0), mPieces.size(), [&](size_t k) { parse(mPieces[k]); });
+    }
+
+    /// InputError for the first bad line, numbered from linesBefore + 1.
+    void check(size_t linesBefore) const
+    {
+        size_t line = linesBefore;
+        for (const Piece& p : mPieces) {
+            if (p.errorAt != SIZE_MAX) {
+                if (p.errorLine == 0) mIn.failAt(p.errorAt, p.error); // no number: a long line
+                mIn.failAt(p.errorAt, "line " + std::to_string(line + p.errorLine) + p.error);
+            }
+            line += p.lines;
+        }
+    }
+
+    size_t rows() const
+    {
+        size_t n = 0;
+        for (const Piece& p : mPieces)
+            n += p.values.size() / mColumns;
+        return n;
+    }
+
+    /// f(first row, the piece's values, row-major) for each piece, on all threads.
+    template <typename F> void forPieces(const F& f) const
+    {
+        std::vector<size_t> first(mPieces.size() + 1, 0);
+        for (size_t k = 0; k < mPieces.size(); ++k)
+            first[k + 1] = first[k] + mPieces[k].values.size() / mColumns;
+        tbb::parallel_for(size_t(0), mPieces.size(),
+                          [&](size_t k) { f(first[k], mPieces[k].values); });
+    }
+
+private:
+    struct Piece
+    {
+        size_t begin = 0, end = 0;
+        size_t lines = 0;
+        std::vector<float> values;
+        size_t errorAt = SIZE_MAX, errorLine = 0; // errorLine 0: a message without a line number
+        std::string error;
+    };
+
+    const ByteReader& mIn;
+    char mDelim;
+    size_t mColumns;
+    std::vector<Piece> mPieces;
+
+    void parse(Piece& p) const
+    {
+        const char* d = reinterpret_cast<const char*>(mIn.data());
+        std::vector<std::pair<const char*, const char*>> fields;
+        for (size_t at = p.begin; at < p.end;) {
+            const void* nl = std::memchr(d + at, '\n', p.end - at);
+            const size_t end = nl ? size_t(static_cast<const char*>(nl) - d) : p.end;
+            ++p.lines;
+            if (end - at > kMaxLine + 1) {
+                p.errorAt = at, p.error = "line too long in a text line";
+                return;
+            }
+            const char* b = d + at;
+            const char* e = d + end;
+            at = end + 1;
+            if (e > b && e[-1] == '\r') --e;
+            const char* first = b;
+            while (first < e && isSpace(uint8_t(*first)))
+                ++first;
+            if (first == e || *first == '#' || (*first == '/' && e - first > 1 && first[1] == '/'))
+                continue;
+            split(b, e, fields);
+            if (fields.size() != mColumns) {
+                p.errorAt = size_t(b - d), p.errorLine = p.lines;
+                p.error = " has " + std::to_string(fields.size()) +
+                          " columns, the first data line had " + std::to_string(mColumns);
+                return;
+            }
+            for (const auto& [fb, fe] : fields) {
+                double v;
+                if (!parseFloat(fb, fe, v)) {
+                    p.errorAt = size_t(b - d), p.errorLine = p.lines;
+                    p.error = ": '" + std::string(fb, std::min<size_t>(size_t(fe - fb), 40)) +
+                              "' is not a number";
+                    return;
+                }
+                p.values.push_back(float(v));
+            }
+        }
+    }
+
+    /// splitFields' fields of [b, e), as ranges of the file's bytes.
+    void split(const char* b, const char* e,
+               std::vector<std::pair<const char*, const char*>>& fields) const
+    {
+        fields.clear();
+        if (mDelim == ' ') {
+            for (const char* i = b; i < e;) {
+                while (i < e && isSpace(uint8_t(*i)))
+                    ++i;
+                const char* j = i;
+                while (j < e && !isSpace(uint8_t(*j)))
+                    ++j;
+                if (j > i) fields.emplace_back(i, j);
+                i = j;
+            }
+            return;
+        }
+        for (const char* start = b;;) {
+            const char* end = std::find(start, e, mDelim);
+            const char *fb = start, *fe = end;
+            while (fb < fe && (isSpace(uint8_t(*fb)) || *fb == '"'))
+                ++fb;
+            while (fe > fb && (isSpace(uint8_t(fe[-1])) || fe[-1] == '"'))
+                --fe;
+            fields.emplace_back(fb, fe);
+            if (end == e) break;
+            start = end + 1;
+        }
+    }
+};
+
 } // namespace
 
 ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
 {
     ByteReader in(data, size, src);
-    // Find the first content line to choose the delimiter and detect a header.
+    // The first content line chooses the delimiter and says whether there is a header; the
+    // data lines from there on are parsed on all threads (CsvRows).
     std::vector<std::string> header;
     char delim = ' ';
-    bool delimChosen = false;
-    std::vector<double> values;
-    size_t columns = 0;
-    size_t lineNo = 0;
+    size_t columns = 0, lineNo = 0, dataBegin = size;
     while (!in.atEnd()) {
         const size_t at = in.offset();
-        const std::string l = in.line("a text line", 1 << 20);
+        const std::string l = in.line("a text line", CsvRows::kMaxLine);
         ++lineNo;
         size_t first = 0;
         while (first < l.size() && isSpace(uint8_t(l[first])))
@@ -92,52 +240,37 @@ ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, st
         if (first == l.size() || l[first] == '#' ||
             (l[first] == '/' && l.size() > first + 1 && l[first + 1] == '/'))
             continue;
-        if (!delimChosen) {
-            delim = l.find(',') != std::string::npos    ? ','
-                    : l.find(';') != std::string::npos  ? ';'
-                    : l.find('\t') != std::string::npos ? '\t'
-                                                        : ' ';
-            delimChosen = true;
-        }
+        delim = l.find(',') != std::string::npos    ? ','
+                : l.find(';') != std::string::npos  ? ';'
+                : l.find('\t') != std::string::npos ? '\t'
+                                                    : ' ';
         const auto fields = splitFields(l, delim);
-        if (columns == 0) {
-            double v;
-            const bool numeric =
-                !fields.empty() &&
-                parseFloat(fields[0].data(), fields[0].data() + fields[0].size(), v);
-            columns = fields.size();
-            if (!numeric) {
-                header = fields;
-                continue;
-            }
+        double v;
+        const bool numeric =
+            !fields.empty() && parseFloat(fields[0].data(), fields[0].data() + fields[0].size(), v);
+        columns = fields.size();
+        if (!numeric) {
+            header = fields;
+            dataBegin = in.offset();
+        } else {
             if (columns < 3)
                 in.failAt(at, "line " + std::to_string(lineNo) + " has " + std::to_string(columns) +
                                   " columns; x, y, z expected");
+            dataBegin = at, --lineNo; // the first data line is parsed with the others
         }
-        if (fields.size() != columns)
-            in.failAt(at, "line " + std::to_string(lineNo) + " has " +
-                              std::to_string(fields.size()) + " columns, the first data line had " +
-                              std::to_string(columns));
-        for (const std::string& f : fields) {
-            double v;
-            if (!parseFloat(f.data(), f.data() + f.size(), v))
-                in.failAt(at, "line " + std::to_string(lineNo) + ": '" + f.substr(0, 40) +
-                                  "' is not a number");
-            values.push_back(v);
-        }
+        break;
     }
+    const CsvRows rows(in, dataBegin, delim, std::max<size_t>(columns, 1));
+    rows.check(lineNo);
+    const size_t n = rows.rows();
     // A header and nothing else is an empty file in a text format's clothes (an empty .xyz
     // is refused the same way): say so, in info too.
-    if (values.empty()) in.failAt(0, header.empty() ? "no data rows" : "a header and no data rows");
-    if (columns == 0 && !header.empty()) columns = header.size();
+    if (n == 0) in.failAt(0, header.empty() ? "no data rows" : "a header and no data rows");
     int axis[3] = {0, 1, 2};
     std::vector<std::string> names(columns);
     for (size_t c = 0; c < columns; ++c)
         names[c] = "col" + std::to_string(c);
     if (!header.empty()) {
-        if (header.size() != columns)
-            in.fail("header has " + std::to_string(header.size()) + " columns, data " +
-                    std::to_string(columns));
         axis[0] = axis[1] = axis[2] = -1;
         for (size_t c = 0; c < columns; ++c) {
             names[c] = header[c];
@@ -148,13 +281,14 @@ ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, st
             in.failAt(0, "header names no x, y, z columns (found: " + header[0].substr(0, 40) +
                              (columns > 1 ? ", ..." : "") + ")");
     }
-    const size_t n = columns ? values.size() / columns : 0;
     ParticleSet set;
-    set.positions.resize(n);
-    for (size_t i = 0; i < n; ++i)
-        set.positions[i] =
-            Vec3f(float(values[i * columns + axis[0]]), float(values[i * columns + axis[1]]),
-                  float(values[i * columns + axis[2]]));
+    util::resizeInParallel(set.positions, n);
+    rows.forPieces([&](size_t first, const std::vector<float>& v) {
+        for (size_t i = 0; i < v.size() / columns; ++i)
+            set.positions[first + i] =
+                Vec3f(v[i * columns + size_t(axis[0])], v[i * columns + size_t(axis[1])],
+                      v[i * columns + size_t(axis[2])]);
+    });
     for (size_t c = 0; c < columns;) {
         if (int(c) == axis[0] || int(c) == axis[1] || int(c) == axis[2]) {
             ++c;
@@ -162,11 +296,14 @@ ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, st
         }
         std::string base;
         const size_t run = componentRun(names, c, "_:", base);
-        std::vector<float> v(n * run);
-        for (size_t i = 0; i < n; ++i)
-            for (size_t k = 0; k < run; ++k)
-                v[i * run + k] = float(values[i * columns + c + k]);
-        set.addFloat(base, int(run), std::move(v));
+        std::vector<float> a;
+        util::resizeInParallel(a, n * run);
+        rows.forPieces([&](size_t first, const std::vector<float>& v) {
+            for (size_t i = 0; i < v.size() / columns; ++i)
+                for (size_t k = 0; k < run; ++k)
+                    a[(first + i) * run + k] = v[i * columns + c + k];
+        });
+        set.addFloat(base, int(run), std::move(a));
         c += run;
     }
     if (detail) {

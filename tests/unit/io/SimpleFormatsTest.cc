@@ -56,6 +56,67 @@ TEST(Csv, RaggedRowsAndBadNumbersNamed)
               std::string::npos);
 }
 
+TEST(Csv, ManyPiecesInOrderAndTheFirstBadLineNamed)
+{
+    // 200,000 rows (about 5 MB: the reader parses it in pieces of 1 MiB on all threads), a
+    // comment every 1,000 rows and CRLF line ends. Values exact in float, from the row number.
+    const size_t n = 200000;
+    std::vector<std::string> lines = {"x,y,z,v_0,v_1"};
+    std::vector<size_t> rowLine(n); // the file's line number (from 1) of each row
+    for (size_t i = 0; i < n; ++i) {
+        if (i % 1000 == 0) lines.push_back("# rows from " + std::to_string(i));
+        lines.push_back(std::to_string(i) + ".25," + std::to_string(i % 977) + ",-" +
+                        std::to_string(i) + ".5, " + std::to_string(i % 13) + " ,\"7\"");
+        rowLine[i] = lines.size();
+    }
+    const auto join = [](const std::vector<std::string>& l) {
+        std::string s;
+        for (const std::string& x : l)
+            s += x + "\r\n";
+        return s;
+    };
+    const ParticleSet ps = readBytes(join(lines), ParticleFormat::Csv);
+    ASSERT_EQ(ps.size(), n);
+    const Attribute* v = ps.find("v");
+    ASSERT_TRUE(v && v->components == 2);
+    size_t bad = 0;
+    for (size_t i = 0; i < n; ++i) {
+        bad += ps.positions[i] != Vec3f(float(i) + 0.25f, float(i % 977), -(float(i) + 0.5f));
+        bad += v->floats[2 * i] != float(i % 13) || v->floats[2 * i + 1] != 7.f;
+    }
+    EXPECT_EQ(bad, 0u);
+
+    // Two bad rows in different pieces: the first one in the file is named, by its line.
+    std::vector<std::string> two = lines;
+    two[rowLine[150000] - 1] = "1,2";
+    two[rowLine[180000] - 1] = "1,2,3,4,abc";
+    EXPECT_NE(readError(join(two), ParticleFormat::Csv)
+                  .find("line " + std::to_string(rowLine[150000]) +
+                        " has 2 columns, the first data line had 5"),
+              std::string::npos);
+    two[rowLine[150000] - 1] = lines[rowLine[150000] - 1];
+    EXPECT_NE(readError(join(two), ParticleFormat::Csv)
+                  .find("line " + std::to_string(rowLine[180000]) + ": 'abc' is not a number"),
+              std::string::npos);
+    // A line past 1 MiB (2^20 + 1 bytes before its end) is refused where it starts; one byte
+    // shorter, it is read (here: as a comment).
+    for (const bool tooLong : {false, true}) {
+        std::vector<std::string> l = lines;
+        l[rowLine[120000] - 1] = "#" + std::string((size_t(1) << 20) - (tooLong ? 0 : 1), 'c');
+        const std::string file = join(l);
+        size_t at = 0;
+        for (size_t k = 0; k + 1 < rowLine[120000]; ++k)
+            at += l[k].size() + 2;
+        const std::string e = readError(file, ParticleFormat::Csv);
+        if (tooLong)
+            EXPECT_NE(e.find("line too long in a text line (at byte " + std::to_string(at) + ")"),
+                      std::string::npos)
+                << e;
+        else
+            EXPECT_EQ(readBytes(file, ParticleFormat::Csv).size(), n - 1);
+    }
+}
+
 namespace {
 std::string npy(const std::string& descr, bool fortran, const std::string& shape,
                 const std::string& data, int version = 1)
