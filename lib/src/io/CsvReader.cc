@@ -3,6 +3,7 @@
 // px.., pos_x.., position_x.., ParaView's "Points:0".."Points:2"); other columns become float
 // attributes, with "name_0".. or "name:0".. runs regrouped into one vector attribute. Without a
 // header the first three columns are x, y, z and the rest "col3", "col4", ...
+#include "io/FileCursor.h"
 #include "io/TextParse.h"
 
 #include "util/Memory.h"
@@ -76,6 +77,48 @@ int axisOf(const std::string& name)
     return -1;
 }
 
+/// A text file's bytes: in memory, or in the file, read a piece at a time by the task that
+/// parses it (no copy of the whole file).
+class TextBytes
+{
+public:
+    TextBytes(const uint8_t* data, size_t size) : mData(data), mSize(size) {}
+    explicit TextBytes(const OpenFile& file) : mFile(&file), mSize(size_t(file.size())) {}
+
+    size_t size() const { return mSize; }
+
+    /// The offset just past the first '\n' at or after `at`; the end where there is none.
+    size_t pastLineEnd(size_t at) const
+    {
+        if (mData) {
+            const void* nl = std::memchr(mData + at, '\n', mSize - at);
+            return nl ? size_t(static_cast<const uint8_t*>(nl) - mData) + 1 : mSize;
+        }
+        uint8_t block[1 << 16];
+        for (size_t n; at < mSize; at += n) {
+            n = std::min(sizeof block, mSize - at);
+            mFile->readAt(at, block, n);
+            if (const void* nl = std::memchr(block, '\n', n))
+                return at + size_t(static_cast<const uint8_t*>(nl) - block) + 1;
+        }
+        return mSize;
+    }
+
+    /// [begin, end): where it lies in memory, or read into buffer.
+    const char* bytes(size_t begin, size_t end, std::vector<char>& buffer) const
+    {
+        if (mData) return reinterpret_cast<const char*>(mData) + begin;
+        buffer.resize(end - begin);
+        mFile->readAt(begin, buffer.data(), buffer.size());
+        return buffer.data();
+    }
+
+private:
+    const uint8_t* mData = nullptr;
+    const OpenFile* mFile = nullptr;
+    size_t mSize;
+};
+
 /// The data lines after the header, cut into pieces of about 1 MiB at line ends and parsed by
 /// all threads: each piece's rows as floats (float(value), as through a double before), its
 /// line count, and its first error. The first error in the file is the one named.
@@ -84,17 +127,13 @@ class CsvRows
 public:
     static constexpr size_t kMaxLine = size_t(1) << 20; // ByteReader::line's limit, as before
 
-    CsvRows(const ByteReader& in, size_t begin, char delim, size_t columns)
-        : mIn(in), mDelim(delim), mColumns(columns)
+    CsvRows(const TextBytes& bytes, size_t begin, char delim, size_t columns)
+        : mBytes(bytes), mDelim(delim), mColumns(columns)
     {
-        const uint8_t* d = in.data();
-        const size_t size = in.size();
+        const size_t size = bytes.size();
         for (size_t at = begin; at < size;) {
             size_t end = std::min(size, at + (size_t(1) << 20));
-            if (end < size) {
-                const void* nl = std::memchr(d + end, '\n', size - end);
-                end = nl ? size_t(static_cast<const uint8_t*>(nl) - d) + 1 : size;
-            }
+            if (end < size) end = bytes.pastLineEnd(end);
             mPieces.emplace_back();
             mPieces.back().begin = at, mPieces.back().end = end;
             at = end;
@@ -102,17 +141,21 @@ public:
         tbb::parallel_for(size_t(0), mPieces.size(), [&](size_t k) { parse(mPieces[k]); });
     }
 
-    /// InputError for the first bad line, numbered from linesBefore + 1.
-    void check(size_t linesBefore) const
+    /// Whether a line is bad; the first one's offset and message, numbered from linesBefore + 1.
+    bool firstError(size_t linesBefore, size_t& at, std::string& message) const
     {
         size_t line = linesBefore;
         for (const Piece& p : mPieces) {
             if (p.errorAt != SIZE_MAX) {
-                if (p.errorLine == 0) mIn.failAt(p.errorAt, p.error); // no number: a long line
-                mIn.failAt(p.errorAt, "line " + std::to_string(line + p.errorLine) + p.error);
+                at = p.errorAt;
+                message = p.errorLine == 0 // no number: a long line
+                              ? p.error
+                              : "line " + std::to_string(line + p.errorLine) + p.error;
+                return true;
             }
             line += p.lines;
         }
+        return false;
     }
 
     size_t rows() const
@@ -143,21 +186,23 @@ private:
         std::string error;
     };
 
-    const ByteReader& mIn;
+    const TextBytes& mBytes;
     char mDelim;
     size_t mColumns;
     std::vector<Piece> mPieces;
 
     void parse(Piece& p) const
     {
-        const char* d = reinterpret_cast<const char*>(mIn.data());
+        std::vector<char> buffer;
+        const char* d = mBytes.bytes(p.begin, p.end, buffer); // offsets below from p.begin
+        const size_t size = p.end - p.begin;
         std::vector<std::pair<const char*, const char*>> fields;
-        for (size_t at = p.begin; at < p.end;) {
-            const void* nl = std::memchr(d + at, '\n', p.end - at);
-            const size_t end = nl ? size_t(static_cast<const char*>(nl) - d) : p.end;
+        for (size_t at = 0; at < size;) {
+            const void* nl = std::memchr(d + at, '\n', size - at);
+            const size_t end = nl ? size_t(static_cast<const char*>(nl) - d) : size;
             ++p.lines;
             if (end - at > kMaxLine + 1) {
-                p.errorAt = at, p.error = "line too long in a text line";
+                p.errorAt = p.begin + at, p.error = "line too long in a text line";
                 return;
             }
             const char* b = d + at;
@@ -171,7 +216,7 @@ private:
                 continue;
             split(b, e, fields);
             if (fields.size() != mColumns) {
-                p.errorAt = size_t(b - d), p.errorLine = p.lines;
+                p.errorAt = p.begin + size_t(b - d), p.errorLine = p.lines;
                 p.error = " has " + std::to_string(fields.size()) +
                           " columns, the first data line had " + std::to_string(mColumns);
                 return;
@@ -179,7 +224,7 @@ private:
             for (const auto& [fb, fe] : fields) {
                 double v;
                 if (!parseFloat(fb, fe, v)) {
-                    p.errorAt = size_t(b - d), p.errorLine = p.lines;
+                    p.errorAt = p.begin + size_t(b - d), p.errorLine = p.lines;
                     p.error = ": '" + std::string(fb, std::min<size_t>(size_t(fe - fb), 40)) +
                               "' is not a number";
                     return;
@@ -220,11 +265,11 @@ private:
     }
 };
 
-} // namespace
-
-ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+/// In: a ByteReader over the file in memory, or a FileCursor over the file with bytes reading
+/// the same file (the same messages either way).
+template <typename In> ParticleSet readCsvFrom(In& in, const TextBytes& bytes, std::string* detail)
 {
-    ByteReader in(data, size, src);
+    const size_t size = in.size();
     // The first content line chooses the delimiter and says whether there is a header; the
     // data lines from there on are parsed on all threads (CsvRows).
     std::vector<std::string> header;
@@ -260,8 +305,10 @@ ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, st
         }
         break;
     }
-    const CsvRows rows(in, dataBegin, delim, std::max<size_t>(columns, 1));
-    rows.check(lineNo);
+    const CsvRows rows(bytes, dataBegin, delim, std::max<size_t>(columns, 1));
+    size_t errorAt;
+    std::string error;
+    if (rows.firstError(lineNo, errorAt, error)) in.failAt(errorAt, error);
     const size_t n = rows.rows();
     // A header and nothing else is an empty file in a text format's clothes (an empty .xyz
     // is refused the same way): say so, in info too.
@@ -314,6 +361,20 @@ ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, st
                   "-separated, " + (header.empty() ? "no header" : "header");
     }
     return set;
+}
+
+} // namespace
+
+ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail)
+{
+    ByteReader in(data, size, src);
+    return readCsvFrom(in, TextBytes(data, size), detail);
+}
+
+ParticleSet readCsv(const OpenFile& file, const std::string& src, std::string* detail)
+{
+    FileCursor in(file, src);
+    return readCsvFrom(in, TextBytes(file), detail);
 }
 
 } // namespace io_internal

@@ -50,6 +50,9 @@ bool isTextXyz(const uint8_t* head, size_t headBytes);
 /// A raw .xyz (checkXyzSize passed) straight from the file into the positions.
 ParticleSet readXyz(const OpenFile& file, std::string* detail);
 ParticleSet readCsv(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
+/// The text read a piece at a time by the tasks that parse it, with no copy of the whole file: the
+/// same values and messages.
+ParticleSet readCsv(const OpenFile& file, const std::string& src, std::string* detail);
 ParticleSet readNpy(const uint8_t* data, size_t size, const std::string& src, std::string* detail);
 /// The array read by all threads from where it lies in the file: the same values and messages.
 ParticleSet readNpy(const OpenFile& file, const std::string& src, std::string* detail);

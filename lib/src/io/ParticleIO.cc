@@ -193,41 +193,38 @@ ParticleSet readParticles(const std::string& path, const ReadOptions& options, R
     if (format == ParticleFormat::Unknown)
         throw InputError(path + ": unknown particle file type (extensions: .vtk .vtu .vtp .bgeo "
                                 ".bgeo.gz .ply .xyz .csv .txt .npy .vdb)");
-    if (format == ParticleFormat::Xyz || format == ParticleFormat::Bgeo ||
-        format == ParticleFormat::Ply || format == ParticleFormat::VtkLegacy ||
-        format == ParticleFormat::Npy) {
-        // binary records straight from the file into their arrays, read by all threads: no
-        // buffer of the whole file (a 13.1M-particle frame is 157 MB as raw .xyz)
+    if (format != ParticleFormat::VtkXml && format != ParticleFormat::VdbPoints) {
+        // read from the file where the values lie, by all threads, with no buffer of the whole
+        // file (a 13.1M-particle frame is 157 MB as raw .xyz, 423 MB as text)
         const OpenFile file(path);
         const std::vector<uint8_t> head = file.readHead(4096);
         const size_t n = head.size();
         std::string detail;
-        if (format == ParticleFormat::Xyz && n > 0 && !isTextXyz(head.data(), n)) {
+        std::optional<ParticleSet> set;
+        if (n > 0) {
             checkContent(head.data(), n, format, path);
-            checkXyzSize(head.data(), n, file.size(), path);
-            ParticleSet set = readXyz(file, &detail);
-            return checked(std::move(set), format, path, detail, size_t(file.size()), options,
+            const bool text = format == ParticleFormat::Xyz && isTextXyz(head.data(), n);
+            if (format == ParticleFormat::Xyz && !text) {
+                checkXyzSize(head.data(), n, file.size(), path);
+                set = readXyz(file, &detail);
+            } else if (text || format == ParticleFormat::Csv) {
+                set = readCsv(file, path, &detail);
+                if (text) detail = "ASCII text (" + detail + ")";
+            } else if (format == ParticleFormat::Bgeo) {
+                set = readBgeo(file, path, &detail); // nullopt: gzip, or what the file lacks
+            } else if (format == ParticleFormat::Ply) {
+                set = readPly(file, path, &detail); // nullopt: ASCII, or what the file lacks
+            } else if (format == ParticleFormat::Npy) {
+                set = readNpy(file, path, &detail);
+            } else {
+                set = readVtkLegacy(file, path, &detail); // nullopt: ASCII
+            }
+        }
+        if (set)
+            return checked(std::move(*set), format, path, detail, size_t(file.size()), options,
                            info);
-        }
-        if (format != ParticleFormat::Xyz && n > 0) {
-            checkContent(head.data(), n, format, path);
-            std::optional<ParticleSet> set =
-                format == ParticleFormat::Bgeo  ? readBgeo(file, path, &detail)
-                : format == ParticleFormat::Ply ? readPly(file, path, &detail)
-                : format == ParticleFormat::Npy ? readNpy(file, path, &detail)
-                                                : readVtkLegacy(file, path, &detail);
-            if (set)
-                return checked(std::move(*set), format, path, detail, size_t(file.size()), options,
-                               info);
-        }
     }
-    // A raw .xyz of the wrong size is refused from its first bytes, before the rest is read.
-    const std::vector<uint8_t> data =
-        readFile(path, format == ParticleFormat::Xyz
-                           ? HeadCheck([&](const uint8_t* head, size_t n, uint64_t bytes) {
-                                 checkXyzSize(head, n, bytes, path);
-                             })
-                           : HeadCheck());
+    const std::vector<uint8_t> data = readFile(path);
     return readParticlesFromMemory(data.data(), data.size(), format, path, options, info);
 }
 

@@ -75,16 +75,22 @@ TEST(Csv, ManyPiecesInOrderAndTheFirstBadLineNamed)
             s += x + "\r\n";
         return s;
     };
-    const ParticleSet ps = readBytes(join(lines), ParticleFormat::Csv);
-    ASSERT_EQ(ps.size(), n);
-    const Attribute* v = ps.find("v");
-    ASSERT_TRUE(v && v->components == 2);
-    size_t bad = 0;
-    for (size_t i = 0; i < n; ++i) {
-        bad += ps.positions[i] != Vec3f(float(i) + 0.25f, float(i % 977), -(float(i) + 0.5f));
-        bad += v->floats[2 * i] != float(i % 13) || v->floats[2 * i + 1] != 7.f;
+    TempDir dir;
+    writeFile(dir.path("many.csv"), join(lines));
+    for (const bool fromFile : {false, true}) {
+        SCOPED_TRACE(fromFile ? "from the file" : "from memory");
+        const ParticleSet ps = fromFile ? io::readParticles(dir.path("many.csv"))
+                                        : readBytes(join(lines), ParticleFormat::Csv);
+        ASSERT_EQ(ps.size(), n);
+        const Attribute* v = ps.find("v");
+        ASSERT_TRUE(v && v->components == 2);
+        size_t bad = 0;
+        for (size_t i = 0; i < n; ++i) {
+            bad += ps.positions[i] != Vec3f(float(i) + 0.25f, float(i % 977), -(float(i) + 0.5f));
+            bad += v->floats[2 * i] != float(i % 13) || v->floats[2 * i + 1] != 7.f;
+        }
+        EXPECT_EQ(bad, 0u);
     }
-    EXPECT_EQ(bad, 0u);
 
     // Two bad rows in different pieces: the first one in the file is named, by its line.
     std::vector<std::string> two = lines;
@@ -94,6 +100,16 @@ TEST(Csv, ManyPiecesInOrderAndTheFirstBadLineNamed)
                   .find("line " + std::to_string(rowLine[150000]) +
                         " has 2 columns, the first data line had 5"),
               std::string::npos);
+    writeFile(dir.path("two.csv"), join(two));
+    try {
+        io::readParticles(dir.path("two.csv"));
+        ADD_FAILURE() << "a bad file was read";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("line " + std::to_string(rowLine[150000]) +
+                                             " has 2 columns"),
+                  std::string::npos)
+            << e.what();
+    }
     two[rowLine[150000] - 1] = lines[rowLine[150000] - 1];
     EXPECT_NE(readError(join(two), ParticleFormat::Csv)
                   .find("line " + std::to_string(rowLine[180000]) + ": 'abc' is not a number"),
