@@ -1,5 +1,7 @@
-// Formats.h - the per-format readers and encoders behind ParticleIO.h. Each reader takes the
-// whole file in memory and a source name for messages; each encoder returns the file's bytes.
+// Formats.h - the per-format readers and writers behind ParticleIO.h. Each reader takes the
+// file in memory and a source name for messages (readParticlesFromMemory); all but VTK XML and
+// .vdb also read from an OpenFile, where the values lie, with no copy of the file (readParticles).
+// The writers stream into a StreamFile.
 #pragma once
 
 #include <fluidsurf/ParticleSet.h>
