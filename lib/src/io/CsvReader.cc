@@ -87,21 +87,22 @@ public:
 
     size_t size() const { return mSize; }
 
-    /// The offset just past the first '\n' at or after `at`; the end where there is none.
-    size_t pastLineEnd(size_t at) const
+    /// The offset just past the first '\n' in [at, limit); limit (or the end) where there is none.
+    size_t pastLineEnd(size_t at, size_t limit) const
     {
+        limit = std::min(limit, mSize);
         if (mData) {
-            const void* nl = std::memchr(mData + at, '\n', mSize - at);
-            return nl ? size_t(static_cast<const uint8_t*>(nl) - mData) + 1 : mSize;
+            const void* nl = std::memchr(mData + at, '\n', limit - at);
+            return nl ? size_t(static_cast<const uint8_t*>(nl) - mData) + 1 : limit;
         }
         uint8_t block[1 << 16];
-        for (size_t n; at < mSize; at += n) {
-            n = std::min(sizeof block, mSize - at);
+        for (size_t n; at < limit; at += n) {
+            n = std::min(sizeof block, limit - at);
             mFile->readAt(at, block, n);
             if (const void* nl = std::memchr(block, '\n', n))
                 return at + size_t(static_cast<const uint8_t*>(nl) - block) + 1;
         }
-        return mSize;
+        return limit;
     }
 
     /// [begin, end): where it lies in memory, or read into buffer.
@@ -133,7 +134,10 @@ public:
         const size_t size = bytes.size();
         for (size_t at = begin; at < size;) {
             size_t end = std::min(size, at + (size_t(1) << 20));
-            if (end < size) end = bytes.pastLineEnd(end);
+            // A line that runs past the limit ends the piece there: it is refused where it
+            // starts (the next piece's errors come later in the file), and a file of one endless
+            // line is not read whole to find its end.
+            if (end < size) end = bytes.pastLineEnd(end, end + kMaxLine + 2);
             mPieces.emplace_back();
             mPieces.back().begin = at, mPieces.back().end = end;
             at = end;

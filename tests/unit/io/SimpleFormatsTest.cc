@@ -115,15 +115,27 @@ TEST(Csv, ManyPiecesInOrderAndTheFirstBadLineNamed)
                   .find("line " + std::to_string(rowLine[180000]) + ": 'abc' is not a number"),
               std::string::npos);
     // A line past 1 MiB (2^20 + 1 bytes before its end) is refused where it starts; one byte
-    // shorter, it is read (here: as a comment).
-    for (const bool tooLong : {false, true}) {
+    // shorter, it is read (here: as a comment). One of 3 MiB spans pieces that end inside it.
+    for (const int length : {-1, 0, 3 << 20}) {
+        const bool tooLong = length >= 0;
         std::vector<std::string> l = lines;
-        l[rowLine[120000] - 1] = "#" + std::string((size_t(1) << 20) - (tooLong ? 0 : 1), 'c');
+        l[rowLine[120000] - 1] =
+            "#" +
+            std::string(length > 0 ? size_t(length) : (size_t(1) << 20) - size_t(-length), 'c');
         const std::string file = join(l);
         size_t at = 0;
         for (size_t k = 0; k + 1 < rowLine[120000]; ++k)
             at += l[k].size() + 2;
+        writeFile(dir.path("long.csv"), file);
         const std::string e = readError(file, ParticleFormat::Csv);
+        std::string fromFile;
+        try {
+            io::readParticles(dir.path("long.csv"));
+        } catch (const InputError& x) {
+            fromFile = x.what();
+        }
+        EXPECT_EQ(fromFile.empty(), !tooLong);
+        if (tooLong) EXPECT_EQ(fromFile.substr(fromFile.find(": ")), e.substr(e.find(": ")));
         if (tooLong)
             EXPECT_NE(e.find("line too long in a text line (at byte " + std::to_string(at) + ")"),
                       std::string::npos)
