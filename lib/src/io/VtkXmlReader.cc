@@ -30,6 +30,19 @@ struct ArrayInfo
     size_t piece = 0;
 };
 
+/// An array's binary payload: where it lies in the file's bytes (raw), or decoded (base64).
+struct Payload
+{
+    std::string decoded;
+    const uint8_t* raw = nullptr; // raw: no copy of the array
+    size_t rawSize = 0;
+    const uint8_t* data() const
+    {
+        return raw ? raw : reinterpret_cast<const uint8_t*>(decoded.data());
+    }
+    size_t size() const { return raw ? rawSize : decoded.size(); }
+};
+
 struct ScalarType
 {
     size_t size = 0;
@@ -227,7 +240,7 @@ private:
 
     /// Binary payload of one array: header (+ block table) followed by data or zlib blocks.
     /// bytes() yields decoded bytes from the array's start; base64 sources decode on demand.
-    std::string payload(const ArrayInfo& a, size_t expectedBytes)
+    Payload payload(const ArrayInfo& a, size_t expectedBytes)
     {
         const std::string fmt = attr(a.tag, "format", "ascii");
         const uint8_t* base;
@@ -251,7 +264,7 @@ private:
         }
         // Decoded size needed: header/block table first, then the data that they announce.
         const size_t tableMax = mHeaderSize * 3;
-        std::string head = take(base, avail, base64, tableMax, a);
+        Payload head = take(base, avail, base64, tableMax, a);
         if (head.size() < mHeaderSize)
             in.failAt(a.tag.begin, "DataArray data ends inside its header");
         size_t total;
@@ -280,7 +293,7 @@ private:
             }
             total = tableBytes + size_t(compressed);
         }
-        std::string all = take(base, avail, base64, total, a);
+        Payload all = take(base, avail, base64, total, a);
         if (all.size() < total)
             in.failAt(a.tag.begin, "DataArray '" + attr(a.tag, "Name") + "' is truncated: needs " +
                                        std::to_string(total) + " bytes, " +
@@ -288,13 +301,14 @@ private:
         return all;
     }
 
-    std::string take(const uint8_t* base, size_t avail, bool base64, size_t bytes,
-                     const ArrayInfo& a)
+    Payload take(const uint8_t* base, size_t avail, bool base64, size_t bytes, const ArrayInfo& a)
     {
-        if (!base64)
-            return std::string(reinterpret_cast<const char*>(base), std::min(avail, bytes));
-        std::string out;
-        if (!decodeBase64(base, avail, out, bytes))
+        Payload out;
+        if (!base64) {
+            out.raw = base, out.rawSize = std::min(avail, bytes);
+            return out;
+        }
+        if (!decodeBase64(base, avail, out.decoded, bytes))
             in.failAt(a.tag.begin,
                       "invalid base64 data in DataArray '" + attr(a.tag, "Name") + "'");
         return out;
@@ -322,7 +336,7 @@ private:
         if (fmt != "binary" && fmt != "appended")
             in.failAt(a.tag.begin, "unknown DataArray format '" + fmt.substr(0, 40) + "'");
         const size_t bytes = size_t(count) * t.size;
-        const std::string p = payload(a, bytes);
+        const Payload p = payload(a, bytes);
         std::string raw;
         const uint8_t* data = reinterpret_cast<const uint8_t*>(p.data()) + mHeaderSize;
         if (!mCompressor.empty()) {
