@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -15,13 +14,9 @@ struct z_stream_s;
 namespace fluidsurf {
 namespace io_internal {
 
-/// Called with the file's first bytes (up to 4096) and its size before the rest is read, so a
-/// format can refuse a file it cannot hold without reading gigabytes first.
-using HeadCheck = std::function<void(const uint8_t* head, size_t headBytes, uint64_t fileBytes)>;
-
 /// Read a whole regular file; InputError with a clear reason (missing, directory, not a regular
-/// file, unreadable), or whatever check throws.
-std::vector<uint8_t> readFile(const std::string& path, const HeadCheck& check = {});
+/// file, unreadable).
+std::vector<uint8_t> readFile(const std::string& path);
 
 /// A regular file open for reading at any offset, for a reader that puts the bytes where they
 /// belong instead of into a buffer first (readFile's refusals; closed when it goes).
