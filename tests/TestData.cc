@@ -105,6 +105,16 @@ ParticleSet readBytes(const std::string& bytes, io::ParticleFormat format, const
                                        format, "test-input", o);
 }
 
+std::vector<std::pair<std::string, ParticleSet>>
+readFromMemoryAndFile(const std::string& bytes, io::ParticleFormat format, const std::string& path)
+{
+    std::vector<std::pair<std::string, ParticleSet>> sets;
+    sets.emplace_back("from memory", readBytes(bytes, format));
+    writeFile(path, bytes);
+    sets.emplace_back("from the file", io::readParticles(path));
+    return sets;
+}
+
 std::string readError(const std::string& bytes, io::ParticleFormat format)
 {
     try {

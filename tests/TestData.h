@@ -10,6 +10,8 @@
 
 #include <cstring>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace fluidsurf {
 namespace test {
@@ -104,6 +106,12 @@ std::string base64(const std::string& data);
 /// Read bytes as the given format through the public API.
 ParticleSet readBytes(const std::string& bytes, io::ParticleFormat format,
                       const io::ReadOptions& o = {});
+
+/// Bytes read both ways a reader is reached: from memory (readBytes), then written to path and
+/// read from the file (io::readParticles, which reads where the values lie). Each set comes with
+/// the way's name, for SCOPED_TRACE.
+std::vector<std::pair<std::string, ParticleSet>>
+readFromMemoryAndFile(const std::string& bytes, io::ParticleFormat format, const std::string& path);
 
 /// The InputError message of reading bytes, or "" if it read fine.
 std::string readError(const std::string& bytes, io::ParticleFormat format);

@@ -85,11 +85,9 @@ TEST(Ply, ManyBinaryVerticesOfMixedTypesInEitherByteOrder)
                 put(int8_t(int(i % 256) - 128));
             }
             put(9); // the tail, which the reader leaves
-            writeFile(dir.path("many.ply"), b.s);
-            for (const bool fromFile : {false, true}) {
-                SCOPED_TRACE(fromFile ? "from the file" : "from memory");
-                const ParticleSet ps = fromFile ? io::readParticles(dir.path("many.ply"))
-                                                : readBytes(b.s, ParticleFormat::Ply);
+            for (const auto& [way, ps] :
+                 readFromMemoryAndFile(b.s, ParticleFormat::Ply, dir.path("many.ply"))) {
+                SCOPED_TRACE(way);
                 ASSERT_EQ(ps.size(), n);
                 const Attribute *flag = ps.find("flag"), *t = ps.find("t"), *id = ps.find("id"),
                                 *v = ps.find("v"), *s = ps.find("s");

@@ -76,11 +76,9 @@ TEST(Csv, ManyPiecesInOrderAndTheFirstBadLineNamed)
         return s;
     };
     TempDir dir;
-    writeFile(dir.path("many.csv"), join(lines));
-    for (const bool fromFile : {false, true}) {
-        SCOPED_TRACE(fromFile ? "from the file" : "from memory");
-        const ParticleSet ps = fromFile ? io::readParticles(dir.path("many.csv"))
-                                        : readBytes(join(lines), ParticleFormat::Csv);
+    for (const auto& [way, ps] :
+         readFromMemoryAndFile(join(lines), ParticleFormat::Csv, dir.path("many.csv"))) {
+        SCOPED_TRACE(way);
         ASSERT_EQ(ps.size(), n);
         const Attribute* v = ps.find("v");
         ASSERT_TRUE(v && v->components == 2);

@@ -141,11 +141,9 @@ TEST(VtkLegacy, BinaryFileReadFromItsSectionsAsFromMemory)
         b.be(int64_t(i) * 1000000007);
     b.text("\n");
     TempDir dir;
-    writeFile(dir.path("wide.vtk"), b.s);
-    for (const bool fromFile : {false, true}) {
-        SCOPED_TRACE(fromFile ? "from the file" : "from memory");
-        const ParticleSet ps = fromFile ? io::readParticles(dir.path("wide.vtk"))
-                                        : readBytes(b.s, ParticleFormat::VtkLegacy);
+    for (const auto& [way, ps] :
+         readFromMemoryAndFile(b.s, ParticleFormat::VtkLegacy, dir.path("wide.vtk"))) {
+        SCOPED_TRACE(way);
         ASSERT_EQ(ps.size(), n);
         const Attribute *rho = ps.find("rho"), *id = ps.find("id");
         ASSERT_TRUE(rho && id);
