@@ -37,26 +37,46 @@ bool parseInt(const char* b, const char* e, int64_t& v)
 
 namespace {
 
-std::vector<std::string> splitFields(const std::string& line, char delim)
+using FieldRanges = std::vector<std::pair<const char*, const char*>>;
+
+/// The fields of the line [b, e) as ranges of its bytes: words for ' ', else split at delim with
+/// spaces and quotes trimmed. The one rule for the header line and the data lines alike.
+void splitFields(const char* b, const char* e, char delim, FieldRanges& fields)
 {
-    std::vector<std::string> f;
-    if (delim == ' ') return splitWords(line);
-    size_t start = 0;
-    while (true) {
-        size_t end = line.find(delim, start);
-        std::string field =
-            line.substr(start, end == std::string::npos ? std::string::npos : end - start);
-        // trim spaces and quotes
-        size_t a = 0, b = field.size();
-        while (a < b && (isSpace(uint8_t(field[a])) || field[a] == '"'))
-            ++a;
-        while (b > a && (isSpace(uint8_t(field[b - 1])) || field[b - 1] == '"'))
-            --b;
-        f.push_back(field.substr(a, b - a));
-        if (end == std::string::npos) break;
+    fields.clear();
+    if (delim == ' ') {
+        for (const char* i = b; i < e;) {
+            while (i < e && isSpace(uint8_t(*i)))
+                ++i;
+            const char* j = i;
+            while (j < e && !isSpace(uint8_t(*j)))
+                ++j;
+            if (j > i) fields.emplace_back(i, j);
+            i = j;
+        }
+        return;
+    }
+    for (const char* start = b;;) {
+        const char* end = std::find(start, e, delim);
+        const char *fb = start, *fe = end;
+        while (fb < fe && (isSpace(uint8_t(*fb)) || *fb == '"'))
+            ++fb;
+        while (fe > fb && (isSpace(uint8_t(fe[-1])) || fe[-1] == '"'))
+            --fe;
+        fields.emplace_back(fb, fe);
+        if (end == e) break;
         start = end + 1;
     }
-    return f;
+}
+
+std::vector<std::string> splitFields(const std::string& line, char delim)
+{
+    FieldRanges ranges;
+    splitFields(line.data(), line.data() + line.size(), delim, ranges);
+    std::vector<std::string> fields;
+    for (const auto& [b, e] : ranges)
+        fields.emplace_back(b, e);
+    return fields;
 }
 
 int axisOf(const std::string& name)
@@ -200,7 +220,7 @@ private:
         std::vector<char> buffer;
         const char* d = mBytes.bytes(p.begin, p.end, buffer); // offsets below from p.begin
         const size_t size = p.end - p.begin;
-        std::vector<std::pair<const char*, const char*>> fields;
+        FieldRanges fields;
         for (size_t at = 0; at < size;) {
             const void* nl = std::memchr(d + at, '\n', size - at);
             const size_t end = nl ? size_t(static_cast<const char*>(nl) - d) : size;
@@ -218,7 +238,7 @@ private:
                 ++first;
             if (first == e || *first == '#' || (*first == '/' && e - first > 1 && first[1] == '/'))
                 continue;
-            split(b, e, fields);
+            splitFields(b, e, mDelim, fields);
             if (fields.size() != mColumns) {
                 p.errorAt = p.begin + size_t(b - d), p.errorLine = p.lines;
                 p.error = " has " + std::to_string(fields.size()) +
@@ -235,36 +255,6 @@ private:
                 }
                 p.values.push_back(float(v));
             }
-        }
-    }
-
-    /// splitFields' fields of [b, e), as ranges of the file's bytes.
-    void split(const char* b, const char* e,
-               std::vector<std::pair<const char*, const char*>>& fields) const
-    {
-        fields.clear();
-        if (mDelim == ' ') {
-            for (const char* i = b; i < e;) {
-                while (i < e && isSpace(uint8_t(*i)))
-                    ++i;
-                const char* j = i;
-                while (j < e && !isSpace(uint8_t(*j)))
-                    ++j;
-                if (j > i) fields.emplace_back(i, j);
-                i = j;
-            }
-            return;
-        }
-        for (const char* start = b;;) {
-            const char* end = std::find(start, e, mDelim);
-            const char *fb = start, *fe = end;
-            while (fb < fe && (isSpace(uint8_t(*fb)) || *fb == '"'))
-                ++fb;
-            while (fe > fb && (isSpace(uint8_t(fe[-1])) || fe[-1] == '"'))
-                --fe;
-            fields.emplace_back(fb, fe);
-            if (end == e) break;
-            start = end + 1;
         }
     }
 };
