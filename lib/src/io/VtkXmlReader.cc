@@ -338,9 +338,9 @@ private:
         const size_t bytes = size_t(count) * t.size;
         const Payload p = payload(a, bytes);
         std::string raw;
-        const uint8_t* data = reinterpret_cast<const uint8_t*>(p.data()) + mHeaderSize;
+        const uint8_t* data = p.data() + mHeaderSize;
         if (!mCompressor.empty()) {
-            const uint8_t* h = reinterpret_cast<const uint8_t*>(p.data());
+            const uint8_t* h = p.data();
             const uint64_t blocks = headerValue(h), blockSize = headerValue(h + mHeaderSize),
                            lastSize = headerValue(h + 2 * mHeaderSize);
             const uint64_t expect =
