@@ -1,11 +1,13 @@
 // Params.cc - defaults and validation of the pipeline parameters.
 #include <fluidsurf/Error.h>
 #include <fluidsurf/Params.h>
+#include <fluidsurf/Vec3.h>
 
 #include <openvdb/Exceptions.h>
 
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 namespace fluidsurf {
 
@@ -33,6 +35,20 @@ void Params::validate() const
 {
     requirePositive(radius, "particle radius");
     requirePositive(voxelSize, "voxel size");
+    // (a voxel of 1e38 gave a grid of -inf; see kMaxCoordinate)
+    for (const auto& [length, name] : {std::pair<double, const char*>{radius, "particle radius"},
+                                       {voxelSize, "voxel size"},
+                                       {influenceRadius, "influence radius R"},
+                                       {smoothingLength, "smoothing length h"},
+                                       {bandWidth, "band width"}})
+        if (length > kMaxCoordinate) {
+            char text[200];
+            std::snprintf(text, sizeof(text),
+                          "%s %g is beyond %g world units, where float32 distances overflow; "
+                          "scale the positions down",
+                          name, length, kMaxCoordinate);
+            throw ValueError(text);
+        }
     // OpenVDB refuses a transform whose scale determinant is within its tolerance of zero
     // (voxels below about 1.2e-5 world units): say so before any work, in our words.
     try {

@@ -101,3 +101,30 @@ def test_generate_matches_the_cli(cli, tmp_path):
         ours["positions"], np.fromfile(tmp_path / "d.xyz", "<f4").reshape(-1, 3))
     with pytest.raises(ValueError, match="scene"):
         fluidsurf.generate("cube")
+
+
+def test_ragged_and_odd_lists_are_type_errors():
+    # a ragged list made a null array that was then used: a segfault (issue 63)
+    for positions in ([[0, 0, 0], [1, 1]], [[0, 0, 0], "abc"], [[0, 0, 0], [1, [2], 3]]):
+        with pytest.raises((TypeError, ValueError)):
+            fluidsurf.reconstruct(positions, 0.01)
+        with pytest.raises((TypeError, ValueError)):
+            fluidsurf.rasterize(positions, 0.01)
+    with pytest.raises(TypeError, match="must be an array"):
+        fluidsurf.reconstruct([[0, 0, 0], [1, 1]], 0.01)
+
+
+def test_thread_counts_are_bounded():
+    p = fluidsurf.generate("ball", count=500, radius=R)["positions"]
+    for threads in (-1, 4097, 70000):
+        with pytest.raises(ValueError, match="threads"):
+            fluidsurf.reconstruct(p, R, threads=threads)
+    assert len(fluidsurf.reconstruct(p, R, threads=4096, raw=True).triangles) > 0
+
+
+def test_a_nul_in_a_name_is_refused(tmp_path):
+    p = fluidsurf.generate("ball", count=500, radius=R)["positions"]
+    m = fluidsurf.reconstruct(p, R, raw=True)
+    with pytest.raises(fluidsurf.OutputError):
+        m.write(str(tmp_path / "a\x00b.obj"))
+    assert list(tmp_path.iterdir()) == []

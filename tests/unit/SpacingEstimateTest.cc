@@ -153,3 +153,40 @@ TEST(SpacingEstimate, RealFramesGetTheirGivenRadius)
     EXPECT_FALSE(cube.fromDensity);
     EXPECT_NEAR(cube.radius, 0.025, 1e-6);
 }
+
+// A block beside a pile of 150,000 particles at one point (and one of 150,000 within 1e-6 of
+// it): each query in the pile's cell visited all of them, minutes of work that no signal could
+// stop (issue 63). The block's spacing still comes out; the pile's cell is sampled.
+TEST(SpacingEstimate, APileOfParticlesAtOnePointStaysLinearAndTheBlockIsStillMeasured)
+{
+    SceneParams p;
+    p.radius = 0.025;
+    p.count = 100000;
+    const ParticleSet block = generateScene(Scene::Block, p);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> noise(-1e-6f, 1e-6f);
+    for (const bool exact : {true, false}) {
+        ParticleSet ps = block;
+        for (int i = 0; i < 150000; ++i)
+            ps.positions.push_back(exact ? Vec3f(3, 3, 3)
+                                         : Vec3f(3 + noise(rng), 3 + noise(rng), 3 + noise(rng)));
+        const SpacingEstimate e = estimateSpacing(ps);
+        EXPECT_EQ(e.sampled, std::min<size_t>(ps.size(), 200000));
+        EXPECT_LT(e.medianNearest, 1e-5) << "most particles are in the pile";
+    }
+}
+
+// A cancel (Ctrl-C through the context) stops the estimate with Cancelled.
+TEST(SpacingEstimate, ACancelStopsIt)
+{
+    SceneParams p;
+    p.radius = 0.025;
+    p.count = 50000;
+    const ParticleSet ps = generateScene(Scene::Ball, p);
+    Context ctx;
+    size_t calls = 0;
+    ctx.setProgress([&](const ProgressEvent&) { return ++calls < 2; });
+    EXPECT_THROW(estimateSpacing(ps, ctx), Cancelled);
+    Context fresh;
+    EXPECT_NEAR(estimateSpacing(ps, fresh).radius / 0.025, 1, 0.1);
+}

@@ -42,8 +42,7 @@ Runner addConvertCommand(CLI::App& app)
         "  fluidsurf convert 'sim/f_####.vtk' 'vdb/f_####.vdb' --shard slurm --skip-existing");
     return [o]() {
         const auto jobs = planFrames(o->input, o->output, o->frames);
-        refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
-        refuseUnwritableOutputs(outputsOf(jobs));
+        checkRunFiles(inputsOf(jobs), outputsOf(jobs));
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
         io::WriteOptions wo;

@@ -99,6 +99,14 @@ void refuseUnwritableOutputs(const std::vector<std::string>& outputs)
     }
 }
 
+void checkRunFiles(const std::vector<std::string>& inputs, std::vector<std::string> outputs,
+                   const std::string& stats)
+{
+    if (!stats.empty()) outputs.push_back(stats);
+    refuseOverwritingInputs(inputs, outputs);
+    refuseUnwritableOutputs(outputs);
+}
+
 std::vector<std::string> inputsOf(const std::vector<FrameJob>& jobs)
 {
     std::vector<std::string> v;

@@ -35,6 +35,11 @@ void refuseOverwritingInputs(const std::vector<std::string>& inputs,
 /// error its writing would end with, minutes of computing later).
 void refuseUnwritableOutputs(const std::vector<std::string>& outputs);
 
+/// Both checks above, before any work, over outputs and the --stats file (when given): no file
+/// a run writes is one of its inputs or another of its outputs, and every one can be written.
+void checkRunFiles(const std::vector<std::string>& inputs, std::vector<std::string> outputs,
+                   const std::string& stats = std::string());
+
 /// The inputs and outputs of frame jobs, for refuseOverwritingInputs.
 std::vector<std::string> inputsOf(const std::vector<FrameJob>& jobs);
 std::vector<std::string> outputsOf(const std::vector<FrameJob>& jobs);

@@ -119,8 +119,7 @@ int runMeshFrames(const MeshOptions& o, const char* name, const ReadInput& read,
 {
     const PipelineOptions& po = o.pipeline;
     const auto jobs = planMeshJobs(o);
-    refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
-    refuseUnwritableOutputs(outputsOf(jobs));
+    checkRunFiles(inputsOf(jobs), outputsOf(jobs), po.stats);
     Context ctx;
     const auto threadLimit = po.setUp(ctx);
     prepareDevice(ctx.device()); // the CUDA context (0.1-0.3 s) made while the first file is read
@@ -377,8 +376,7 @@ Runner addReconstructCommand(CLI::App& app)
         if (!o->vdb.empty()) vdbJobs = planVdbFrames(o->input, o->vdb, o->frames, "--vdb");
         std::vector<std::string> outputs = outputsOf(jobs), vdbOutputs = outputsOf(vdbJobs);
         outputs.insert(outputs.end(), vdbOutputs.begin(), vdbOutputs.end());
-        refuseOverwritingInputs(inputsOf(jobs), outputs);
-        refuseUnwritableOutputs(outputs);
+        checkRunFiles(inputsOf(jobs), outputs, po.stats);
         ReconstructParams params = po.resolved();
         params.keepGrids = !vdbJobs.empty(); // without --vdb it goes before post-processing
         const std::vector<std::string> gridAttributes =

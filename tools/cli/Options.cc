@@ -2,14 +2,21 @@
 #include "Options.h"
 
 #include <fluidsurf/Error.h>
+#include <fluidsurf/MemoryBudget.h>
 #include <fluidsurf/SpacingEstimate.h>
 #include <fluidsurf/io/AtomicFile.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <optional>
+#include <thread>
+
+#include <semaphore.h>
+#include <time.h>
+#include <unistd.h>
 
 namespace fluidsurf {
 namespace cli {
@@ -17,19 +24,43 @@ namespace cli {
 namespace {
 std::atomic<bool> gInterrupted{false};
 std::atomic<int> gSignal{0};
+sem_t gSignals; // posted by the handler (sem_post is async-signal-safe), waited for below
+
+/// How long a stop may take after the signal before the watchdog ends the process: the loops
+/// check the flag once per range, well within it, but a reader of one huge block, OpenMesh's
+/// decimater or a command without checks (info) would not stop at all.
+constexpr double kGraceSeconds = 0.7;
 
 extern "C" void onInterrupt(int signal)
 {
-    gSignal.store(signal);
-    if (gInterrupted.exchange(true)) {
-        std::signal(signal, SIG_DFL); // a second signal: stop now
-        std::raise(signal);
+    if (!gInterrupted.exchange(true)) gSignal.store(signal);
+    ::sem_post(&gSignals); // a second signal: the watchdog stops at once
+}
+
+/// Waits for the first signal, then for the run to end on its own within kGraceSeconds (the
+/// process ends, and this thread with it) or for a second signal; then removes every temporary
+/// still being written, says so, and ends the process with 128 + the signal.
+void watchdog()
+{
+    while (::sem_wait(&gSignals) != 0) {
     }
+    struct timespec deadline;
+    ::clock_gettime(CLOCK_REALTIME, &deadline);
+    deadline.tv_nsec += long(kGraceSeconds * 1e9);
+    deadline.tv_sec += deadline.tv_nsec / 1000000000L, deadline.tv_nsec %= 1000000000L;
+    while (::sem_timedwait(&gSignals, &deadline) != 0 && errno == EINTR) {
+    }
+    io::removeLiveTemporaries();
+    const char text[] = "fluidsurf: interrupted; no partial output was written\n";
+    (void)!::write(2, text, sizeof(text) - 1);
+    ::_exit(interruptExitCode());
 }
 } // namespace
 
 void installInterruptHandler()
 {
+    ::sem_init(&gSignals, 0, 0);
+    std::thread(watchdog).detach();
     std::signal(SIGINT, onInterrupt);
     std::signal(SIGTERM, onInterrupt);
 }
@@ -144,7 +175,11 @@ void addRunOptions(CLI::App* cmd, PipelineOptions& o, Makes makes)
                       "check the mesh (boundary and non-manifold edges, orientation, ...) and "
                       "print it");
     cmd->add_option("-j,--threads", o.threads, "worker threads (default: all cores)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(CLI::Range(0, Context::kMaxThreads));
+    cmd->add_option("--max-memory", o.maxMemory,
+                    "the most memory a frame may need, e.g. 8G or 500M: a request estimated "
+                    "past it (a voxel too small for the frame, a level set of huge tiles) fails "
+                    "at once with the estimate (default: 80% of this machine's memory)");
     cmd->add_flag("-q,--quiet", o.quiet, "no progress bar and no per-frame lines");
     cmd->add_flag("-v,--verbose", o.verbose,
                   "the timing tree of each frame (share of the total, peak memory)");
@@ -178,10 +213,37 @@ ReconstructParams PipelineOptions::resolved() const
     return p;
 }
 
+size_t parseMemorySize(const std::string& text)
+{
+    size_t used = 0;
+    double value = -1;
+    try {
+        value = std::stod(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    const std::string unit = used ? text.substr(used) : std::string();
+    double scale = -1;
+    if (unit.empty() || unit == "B") scale = 1;
+    if (unit == "K" || unit == "KB" || unit == "KiB") scale = 1024.0;
+    if (unit == "M" || unit == "MB" || unit == "MiB") scale = 1024.0 * 1024;
+    if (unit == "G" || unit == "GB" || unit == "GiB") scale = 1024.0 * 1024 * 1024;
+    if (unit == "T" || unit == "TB" || unit == "TiB") scale = 1024.0 * 1024 * 1024 * 1024;
+    const double bytes = value * scale;
+    if (!used || scale < 0 || !std::isfinite(bytes) || bytes < 1024.0 * 1024 || bytes > 1e18)
+        throw ValueError("--max-memory " + text +
+                         ": a size such as 8G, 500M or 1048576 (bytes), at least 1M");
+    return size_t(bytes);
+}
+
 void PipelineOptions::configure(Context& ctx) const
 {
     ctx.setDevice(deviceFromName(device));
     ctx.setThreads(threads);
+    if (!maxMemory.empty()) { // the readers' too: they have no context
+        ctx.setMemoryBudget(parseMemorySize(maxMemory));
+        setProcessMemoryBudget(parseMemorySize(maxMemory));
+    }
     ctx.setProgress([](const ProgressEvent&) { return !interrupted(); });
 }
 

@@ -28,6 +28,7 @@ struct PipelineOptions
     bool ignoreRadiusAttribute = false;
     bool raw = false; ///< --raw: no decimation, smoothing or subdivision
     int threads = 0;
+    std::string maxMemory; ///< --max-memory SIZE: the context's memory budget ("" the default)
     bool quiet = false, verbose = false, check = false;
     std::string stats; ///< --stats FILE.json
 
@@ -42,6 +43,9 @@ struct PipelineOptions
 };
 
 void addFieldOptions(CLI::App* cmd, PipelineOptions& o);
+/// Bytes from "8G", "500M", "64K" or a plain number of bytes (binary units); ValueError
+/// naming --max-memory otherwise, or for less than 1 MiB.
+size_t parseMemorySize(const std::string& text);
 /// -j, -q, -v, --stats (every pipeline command); --check and --mesher as the command makes.
 /// What a command makes: a level set (no mesh options), a mesh from a level set (--check and
 /// --mesher), or a mesh from a mesh (--check).

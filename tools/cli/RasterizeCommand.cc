@@ -59,8 +59,7 @@ Runner addRasterizeCommand(CLI::App& app)
     return [o]() {
         const PipelineOptions& po = o->pipeline;
         const auto jobs = planVdbFrames(o->input, o->output, o->frames, "output");
-        refuseOverwritingInputs(inputsOf(jobs), outputsOf(jobs));
-        refuseUnwritableOutputs(outputsOf(jobs));
+        checkRunFiles(inputsOf(jobs), outputsOf(jobs), po.stats);
         ReconstructParams params = po.resolved();
         Context ctx;
         const auto threadLimit = po.setUp(ctx);

@@ -2,6 +2,9 @@
 #include "Sequence.h"
 
 #include <fluidsurf/Error.h>
+#include <fluidsurf/io/LevelSetIO.h>
+#include <fluidsurf/io/MeshIO.h>
+#include <fluidsurf/io/ParticleIO.h>
 
 #include <sys/stat.h>
 
@@ -30,6 +33,41 @@ std::string firstLine(const std::string& text)
     return end == std::string::npos ? text : text.substr(0, end);
 }
 
+bool endsWith(const std::string& s, const char* tail)
+{
+    const size_t n = std::char_traits<char>::length(tail);
+    return s.size() >= n && s.compare(s.size() - n, n, tail) == 0;
+}
+
+/// Whether an existing output reads back whole with our own reader for its name: a zero-byte
+/// or truncated file (another tool's, a copy cut short, a disk that filled before this version
+/// checked every write) is not a finished frame. A read costs far less than the frame.
+bool readsBackWhole(const std::string& path)
+{
+    struct stat st;
+    if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode) || st.st_size == 0) return false;
+    try {
+        if (endsWith(path, ".vdb")) {
+            io::describeVdb(path);
+            return true;
+        }
+        if (endsWith(path, ".json")) return true;
+        if (io::meshFormatFromPath(path) != io::MeshFormat::Unknown) {
+            try {
+                io::readMesh(path);
+                return true;
+            } catch (const InputError&) {
+                // .ply and .vtk may hold particles (convert): tried as such below
+            }
+        }
+        if (io::formatFromPath(path) == io::ParticleFormat::Unknown) return true; // none to try
+        io::readParticles(path);
+        return true;
+    } catch (const Error&) {
+        return false;
+    }
+}
+
 } // namespace
 
 void addSequenceOptions(CLI::App* cmd, SequenceOptions& o)
@@ -39,8 +77,8 @@ void addSequenceOptions(CLI::App* cmd, SequenceOptions& o)
                     "I-th (1 <= I <= N); slurm takes the frame numbered $SLURM_ARRAY_TASK_ID "
                     "(sbatch --array=FIRST-LAST)");
     cmd->add_flag("--skip-existing", o.skipExisting,
-                  "leave out frames whose outputs all exist (a re-run after a failure or a "
-                  "time limit); outputs are written whole or not at all");
+                  "leave out frames whose outputs all exist and read back whole (a re-run after "
+                  "a failure or a time limit); outputs are written whole or not at all");
     cmd->add_flag("--keep-going", o.keepGoing,
                   "a frame that fails (corrupt, missing) is reported and left out, and the run "
                   "goes on; it ends with the list of failed frames and exit code 1 (default: "
@@ -111,8 +149,7 @@ bool SequenceRun::skip(const std::vector<std::string>& outputs)
 {
     if (!mOptions.skipExisting) return false;
     for (const std::string& path : outputs) {
-        struct stat st;
-        if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return false;
+        if (!readsBackWhole(path)) return false;
     }
     ++mSkipped;
     return true;

@@ -47,8 +47,9 @@ class SequenceRun
 public:
     SequenceRun(const SequenceOptions& o, bool quiet);
 
-    /// With --skip-existing, whether a frame is done already: every one of its outputs exists
-    /// (outputs are written whole, through a temporary file, or not at all). Counts it.
+    /// With --skip-existing, whether a frame is done already: every one of its outputs exists,
+    /// is not empty and reads back whole with our reader for its format (ours are written
+    /// whole or not at all; a zero-byte or cut file from elsewhere is made again). Counts it.
     bool skip(const std::vector<std::string>& outputs);
     /// The positions in picked whose frames are not done already (skip), in order.
     std::vector<size_t>

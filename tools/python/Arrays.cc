@@ -25,11 +25,17 @@ std::string shapeOf(const py::array& a)
 py::array asArray(py::handle h, const char* name)
 {
     if (py::isinstance<py::array>(h)) return py::reinterpret_borrow<py::array>(h);
+    // lists and other sequences; ensure() gives a null handle (no exception) for what NumPy
+    // cannot make an array of, such as a ragged list, which segfaulted when used
+    py::array a;
     try {
-        return py::array::ensure(h); // lists and other sequences
+        a = py::array::ensure(h);
     } catch (const py::error_already_set&) {
     }
-    throw py::type_error(std::string(name) + " must be an array");
+    if (!a)
+        throw py::type_error(std::string(name) +
+                             " must be an array (or a list of rows of one length, of numbers)");
+    return a;
 }
 
 bool isFloat(const py::array& a)

@@ -3,8 +3,15 @@
 
 #include <fluidsurf/Error.h>
 
+#include <algorithm>
+#include <atomic>
+#include <mutex>
+
+#include <signal.h>
+
 #include <cmath>
 #include <functional>
+#include <pythread.h>
 #include <vector>
 
 namespace py = pybind11;
@@ -160,8 +167,13 @@ const std::vector<Entry>& table()
         FS_CHOICE("isolated", kSpheres, post.isolated, isolatedModeFromName, isolatedModeName),
         FS_REAL("sphere_deviation", kSpheres, post.sphereDeviation, positive),
         Entry{"threads", kRun,
-              [](Settings& s, py::handle v) { s.threads = integer("threads", v, 0, 1 << 16); },
+              [](Settings& s, py::handle v) {
+                  s.threads = integer("threads", v, 0, Context::kMaxThreads);
+              },
               [](const Settings& s) -> py::object { return py::int_(s.threads); }},
+        Entry{"max_memory", kRun,
+              [](Settings& s, py::handle v) { s.maxMemory = nonNegative("max_memory", v); },
+              [](const Settings& s) -> py::object { return py::float_(s.maxMemory); }},
         Entry{"device", kRun,
               [](Settings& s, py::handle v) { s.device = deviceFromName(text("device", v)); },
               [](const Settings& s) -> py::object { return py::str(deviceName(s.device)); }},
@@ -208,6 +220,65 @@ void setUp(Context& ctx, const Settings& s)
 {
     ctx.setDevice(s.device);
     ctx.setThreads(s.threads);
+    ctx.setMemoryBudget(size_t(std::min(s.maxMemory, 1e18)));
+}
+
+namespace {
+std::mutex gInterruptMutex;
+int gInterruptScopes = 0; ///< live InterruptScopes (calls from the main thread only: nested ones)
+struct sigaction gPythonHandler;
+std::atomic<bool> gInterruptFired{false};
+
+extern "C" void onPythonInterrupt(int signal, siginfo_t* info, void* context)
+{
+    gInterruptFired.store(true);
+    // Python's own handler: it marks the signal for PyErr_CheckSignals
+    if (gPythonHandler.sa_flags & SA_SIGINFO)
+        gPythonHandler.sa_sigaction(signal, info, context);
+    else if (gPythonHandler.sa_handler != SIG_DFL && gPythonHandler.sa_handler != SIG_IGN)
+        gPythonHandler.sa_handler(signal);
+}
+
+bool inMainThread()
+{
+    static const unsigned long main =
+        py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+    return PyThread_get_thread_ident() == main;
+}
+} // namespace
+
+InterruptScope::InterruptScope(Context& ctx)
+{
+    if (!inMainThread()) return;
+    std::lock_guard<std::mutex> lock(gInterruptMutex);
+    if (gInterruptScopes == 0) {
+        struct sigaction now;
+        if (::sigaction(SIGINT, nullptr, &now) != 0) return;
+        const bool python =
+            (now.sa_flags & SA_SIGINFO) || (now.sa_handler != SIG_DFL && now.sa_handler != SIG_IGN);
+        if (!python) return; // ignored, or the default: not ours to change
+        gPythonHandler = now;
+        struct sigaction ours = now;
+        ours.sa_flags = (now.sa_flags | SA_SIGINFO) & ~SA_RESETHAND;
+        ours.sa_sigaction = onPythonInterrupt;
+        gInterruptFired.store(false);
+        if (::sigaction(SIGINT, &ours, nullptr) != 0) return;
+    }
+    ++gInterruptScopes;
+    mInstalled = true;
+    ctx.setProgress([](const ProgressEvent&) { return !gInterruptFired.load(); });
+}
+
+InterruptScope::~InterruptScope()
+{
+    if (!mInstalled) return;
+    std::lock_guard<std::mutex> lock(gInterruptMutex);
+    if (--gInterruptScopes == 0) ::sigaction(SIGINT, &gPythonHandler, nullptr);
+}
+
+bool InterruptScope::fired() const
+{
+    return mInstalled && gInterruptFired.load();
 }
 
 py::dict defaults(unsigned groups)

@@ -86,7 +86,7 @@ PyMesh reconstructArrays(py::handle positions, double radius, py::handle radii,
     const ParticleSet ps = particlesFor(s, positions, radii, attributes);
     Context ctx;
     setUp(ctx, s);
-    ReconstructResult res = compute(s, [&] { return reconstruct(ps, s.params, ctx); });
+    ReconstructResult res = compute(s, ctx, [&] { return reconstruct(ps, s.params, ctx); });
     ctx.timing().finish();
     PyMesh out{std::move(res.mesh), py::dict(), std::move(res.vertexAttributes)};
     addFieldInfo(out.info, res.radius, res.field, res.isolatedParticles);
@@ -104,8 +104,8 @@ PyLevelSet rasterizeArrays(py::handle positions, double radius, py::handle radii
     setUp(ctx, s);
     RadiusChoice choice;
     openvdb::GridPtrVec grids;
-    RasterizeResult res = compute(s, [&] {
-        choice = chooseRadius(ps, checkedRadius(radius), s.params.field.perParticleRadii);
+    RasterizeResult res = compute(s, ctx, [&] {
+        choice = chooseRadius(ps, checkedRadius(radius), s.params.field.perParticleRadii, ctx);
         const Params field = s.params.fieldParams(choice.radius);
         RasterizeResult r = rasterizeParticles(ps, field, ctx);
         grids = attributeGrids(ps, s.params.attributes, *r.grid, field.influenceRadius, ctx);

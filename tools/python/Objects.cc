@@ -124,7 +124,7 @@ void bindMesh(py::module_& m)
             setUp(ctx, s);
             PostProcessStats stats;
             PyMesh out;
-            out.mesh = compute(s, [&] {
+            out.mesh = compute(s, ctx, [&] {
                 validate(s.params.post);
                 return postProcessMesh(in.mesh, s.params.post, ctx, &stats);
             });
@@ -216,7 +216,7 @@ void bindLevelSet(py::module_& m)
                 Context ctx;
                 setUp(ctx, s);
                 PyMesh out;
-                out.mesh = compute(s, [&] {
+                out.mesh = compute(s, ctx, [&] {
                     return ls.adaptive.empty() ? meshLevelSet(*ls.grid, s.params.mesh.mesher, ctx)
                                                : meshAdaptiveGrid(ls.adaptive, ctx);
                 });

@@ -109,7 +109,20 @@ public:
 
     /// At most this many worker threads while a stage runs (0: all cores). The CLI's -j.
     int threads() const { return mThreads; }
-    void setThreads(int n) { mThreads = n; }
+    /// ValueError outside [0, kMaxThreads]: TBB's arenas are not made for more (past 65536
+    /// they crashed), and no machine has that many cores.
+    void setThreads(int n);
+    static constexpr int kMaxThreads = 4096;
+
+    /// The most memory one request may take, in bytes: stages estimate what a large structure
+    /// will need before they build it and refuse past this (requireMemory), so an oversized
+    /// request fails at once with the estimate instead of being killed by the kernel, or
+    /// taking the machine down with it. 0 (the default): the process's (MemoryBudget.h).
+    size_t memoryBudget() const;
+    void setMemoryBudget(size_t bytes) { mMemoryBudget = bytes; }
+    /// ValueError "WHAT needs about N MiB, more than the memory budget of M MiB ..." when
+    /// bytes passes memoryBudget().
+    void requireMemory(double bytes, const std::string& what) const;
 
     TimingTree& timing() { return mTiming; }
     const TimingTree& timing() const { return mTiming; }
@@ -134,6 +147,7 @@ public:
 private:
     Device mDevice;
     int mThreads = 0;
+    size_t mMemoryBudget = 0;
     TimingTree mTiming;
     ProgressCallback mProgress;
     std::mutex mProgressMutex;

@@ -10,6 +10,7 @@
 // prefer the simulator's radius when known, and print an estimate as an estimate.
 #pragma once
 
+#include <fluidsurf/Context.h>
 #include <fluidsurf/ParticleSet.h>
 
 namespace fluidsurf {
@@ -25,7 +26,14 @@ struct SpacingEstimate
 };
 
 /// Exact nearest neighbours for up to maxSamples evenly spaced particles (all if fewer); the
-/// density (where used) of 20,000 of them.
+/// density (where used) of 20,000 of them. A cell of the search holding more than a few
+/// thousand particles (a pile of coincident or near-coincident ones, or cells made huge by a far
+/// outlier) is sorted along its widest axis for the nearest-neighbour queries (still exact) and
+/// sampled evenly for the density sums, so that 200,000 particles at one point no longer take
+/// minutes. ctx's checkpoint is called once per range of queries (a cancel throws Cancelled).
+SpacingEstimate estimateSpacing(const ParticleSet& particles, Context& ctx,
+                                size_t maxSamples = 200000);
+/// The same with a context of its own (no progress, no cancel).
 SpacingEstimate estimateSpacing(const ParticleSet& particles, size_t maxSamples = 200000);
 
 } // namespace fluidsurf

@@ -6,6 +6,12 @@
 
 namespace fluidsurf {
 
+/// The largest coordinate (and length) the pipeline accepts, in world units: squared distances
+/// and sums of them stay far inside float32's range (3.4e38) for any two points within it. Past
+/// it, distances overflow to inf and a frame came out as isolated spheres, an empty mesh or NaN
+/// vertices; such input is refused with this bound in the message.
+constexpr double kMaxCoordinate = 1e15;
+
 struct Vec3f
 {
     float x = 0.f, y = 0.f, z = 0.f;
@@ -23,6 +29,12 @@ struct Vec3f
     bool operator!=(const Vec3f& o) const { return !(*this == o); }
 
     bool isFinite() const { return std::isfinite(x) && std::isfinite(y) && std::isfinite(z); }
+    /// Finite and within +-kMaxCoordinate on every axis (NaN fails too).
+    bool isWithinRange() const
+    {
+        const float m = float(kMaxCoordinate);
+        return std::fabs(x) <= m && std::fabs(y) <= m && std::fabs(z) <= m;
+    }
 };
 
 static_assert(sizeof(Vec3f) == 12, "Vec3f must be three packed floats");

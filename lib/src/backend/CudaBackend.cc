@@ -315,7 +315,7 @@ public:
                        TriangleMesh& out, size_t& cells) override
     {
         openvdb::FloatTree::Ptr voxelized;
-        const openvdb::FloatTree& tree = mesh::leafOnlyTree(grid, voxelized);
+        const openvdb::FloatTree& tree = mesh::leafOnlyTree(grid, voxelized, ctx);
         cuda::MeshInput in;
         MeshLeaves leaves;
         {

@@ -2,10 +2,15 @@
 // its data (fluidsurf/Context.h). Below every stage, so stages depend on it and never on the
 // pipeline that runs them.
 #include <fluidsurf/Context.h>
+#include <fluidsurf/Error.h>
+#include <fluidsurf/MemoryBudget.h>
 
 #include <sys/resource.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 
@@ -157,6 +162,53 @@ std::string TimingTree::toJson() const
 }
 
 // --- Context -------------------------------------------------------------------------------
+
+void Context::setThreads(int n)
+{
+    if (n < 0 || n > kMaxThreads)
+        throw ValueError("threads = " + std::to_string(n) + ": between 0 (all cores) and " +
+                         std::to_string(kMaxThreads) + " expected");
+    mThreads = n;
+}
+
+namespace {
+std::atomic<size_t> gProcessBudget{0};
+} // namespace
+
+size_t processMemoryBudget()
+{
+    if (const size_t set = gProcessBudget.load()) return set;
+    const double physical = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGE_SIZE));
+    return physical > 0 ? size_t(0.8 * physical) : SIZE_MAX;
+}
+
+void setProcessMemoryBudget(size_t bytes)
+{
+    gProcessBudget.store(bytes);
+}
+
+void requireMemory(double bytes, const std::string& what, size_t budget)
+{
+    const bool given = budget > 0 || gProcessBudget.load() > 0;
+    if (budget == 0) budget = processMemoryBudget();
+    if (!(bytes > double(budget))) return;
+    char text[200];
+    std::snprintf(text, sizeof(text),
+                  " needs about %.0f MiB, more than the memory budget of %.0f MiB (%s)",
+                  bytes / 1048576.0, double(budget) / 1048576.0,
+                  given ? "--max-memory" : "80% of this machine's memory; --max-memory");
+    throw ValueError(what + text);
+}
+
+size_t Context::memoryBudget() const
+{
+    return mMemoryBudget > 0 ? mMemoryBudget : processMemoryBudget();
+}
+
+void Context::requireMemory(double bytes, const std::string& what) const
+{
+    fluidsurf::requireMemory(bytes, what, memoryBudget());
+}
 
 void Context::checkpoint()
 {

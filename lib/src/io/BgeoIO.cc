@@ -15,6 +15,7 @@
 #include "util/Memory.h"
 
 #include <fluidsurf/Error.h>
+#include <fluidsurf/MemoryBudget.h>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -114,15 +115,40 @@ struct Points
     std::vector<std::vector<float>> floats;
     std::vector<std::vector<int64_t>> ints;
 
-    Points(const Header& h, size_t n) : header(h), floats(h.defs.size()), ints(h.defs.size())
+    /// Arrays for n points; reserveOnly: their storage only reserved (address space, no pages),
+    /// each point's made as ensure() reaches it, so that a header that promises more points
+    /// than the stream holds costs what the stream holds (a gzip stream cannot be sized first).
+    Points(const Header& h, size_t n, const std::string& src, bool reserveOnly = false)
+        : header(h), floats(h.defs.size()), ints(h.defs.size())
     {
-        util::resizeInParallel(set.positions, n);
-        for (size_t a = 0; a < h.defs.size(); ++a) {
-            if (isFloat(a))
-                floats[a].resize(n * h.defs[a].size);
-            else
-                ints[a].resize(n * h.defs[a].size);
+        requireMemory(double(n) * double(bytesPerPoint(h)),
+                      src + ": reading the " + std::to_string(n) + " points its header promises");
+        if (reserveOnly) {
+            set.positions.reserve(n);
+            for (size_t a = 0; a < h.defs.size(); ++a)
+                (isFloat(a) ? floats[a].reserve(n * h.defs[a].size)
+                            : ints[a].reserve(n * h.defs[a].size));
+            return;
         }
+        ensure(n);
+    }
+    /// The arrays sized for count points (within what they reserved: no copy).
+    void ensure(size_t count)
+    {
+        util::resizeInParallel(set.positions, count);
+        for (size_t a = 0; a < header.defs.size(); ++a) {
+            if (isFloat(a))
+                floats[a].resize(count * header.defs[a].size);
+            else
+                ints[a].resize(count * header.defs[a].size);
+        }
+    }
+    static size_t bytesPerPoint(const Header& h)
+    {
+        size_t bytes = sizeof(Vec3f);
+        for (const auto& d : h.defs)
+            bytes += size_t(d.size) * (d.type == kFloat || d.type == kVector ? 4 : 8);
+        return bytes;
     }
     bool isFloat(size_t a) const
     {
@@ -202,7 +228,7 @@ ParticleSet readGzipBgeo(const uint8_t* data, size_t size, const std::string& sr
     // nothing is allocated for them
     const bool mayHold = pointBytes <= 1032 * uint64_t(size) + (uint64_t(1) << 16);
     if (mayHold) {
-        Points points(h, n);
+        Points points(h, n, src, /*reserveOnly=*/true);
         const size_t perSlice = std::max<size_t>(1, (size_t(4) << 20) / recordBytes);
         std::vector<uint8_t> slices[2] = {std::vector<uint8_t>(perSlice * recordBytes),
                                           std::vector<uint8_t>(perSlice * recordBytes)};
@@ -220,7 +246,8 @@ ParticleSet readGzipBgeo(const uint8_t* data, size_t size, const std::string& sr
                 std::memcpy(slice, head.data() + headAt, fromHead);
                 headAt += fromHead, carried -= fromHead;
                 if (in.read(slice + fromHead, bytes - fromHead) < bytes - fromHead) break;
-                decoding.wait(); // the other slice is free again
+                decoding.wait(); // the other slice is free again, and nothing writes the arrays
+                points.ensure(done + count);
                 decoding.run([&points, slice, done, count] { points.decode(slice, done, count); });
                 done += count;
                 at ^= 1;
@@ -262,7 +289,7 @@ std::optional<ParticleSet> readBgeo(const OpenFile& file, const std::string& src
     const uint64_t offset = probe.offset(), recordBytes = h.valuesPerPoint * 4;
     const size_t n = size_t(h.points);
     if (offset + uint64_t(n) * recordBytes > file.size()) return std::nullopt;
-    Points points(h, n);
+    Points points(h, n, src);
     forRecordSlices(file, offset, n, recordBytes,
                     [&](size_t first, size_t count, const uint8_t* records) {
                         for (size_t k = 0; k < count; ++k)
@@ -280,7 +307,7 @@ ParticleSet readBgeo(const uint8_t* data, size_t size, const std::string& src, s
     ByteReader in(data, size, src);
     const Header h = readHeader(in, data, size);
     const size_t n = in.checkedCount(uint64_t(h.points), h.valuesPerPoint * 4, "points");
-    Points points(h, n);
+    Points points(h, n, src);
     points.decode(in.take(n * h.valuesPerPoint * 4, "point data"), 0, n);
     return points.finish();
 }

@@ -47,15 +47,15 @@ std::vector<uint8_t> readFile(const std::string& path)
     // threads, 0.23 s with the parse on all threads)
     util::resizeInParallel(data, size);
     file.readAt(head, data.data() + head, size - head);
-    // Anything beyond the stat size (a file still growing) is read on in pieces.
-    uint8_t piece[1 << 16];
-    for (size_t n; (n = file.readSome(data.size(), piece, sizeof piece)) > 0;)
-        data.insert(data.end(), piece, piece + n);
+    // A file still growing is read to the size it had when opened: read on to its end, one
+    // that a writer keeps growing was read without end (issue 63).
     return data;
 }
 
 OpenFile::OpenFile(const std::string& path) : mPath(path)
 {
+    if (path.find('\0') != std::string::npos) // (open would read the name up to it)
+        throw InputError("input path contains a NUL byte");
     struct stat st;
     checkRegularFile(path, st);
     mFd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -94,15 +94,6 @@ void OpenFile::readAt(uint64_t offset, void* dst, size_t n) const
                          " bytes it had when opened (changed "
                          "while being read?)");
     if (error) throw InputError(mPath + ": read error: " + std::strerror(error));
-}
-
-size_t OpenFile::readSome(uint64_t offset, void* dst, size_t n) const
-{
-    for (;;) {
-        const ssize_t got = ::pread(mFd, dst, n, off_t(offset));
-        if (got >= 0) return size_t(got);
-        if (errno != EINTR) throw InputError(mPath + ": read error: " + std::strerror(errno));
-    }
 }
 
 std::vector<uint8_t> OpenFile::readHead(size_t most) const

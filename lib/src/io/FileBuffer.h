@@ -33,9 +33,6 @@ public:
     /// page faults of fresh memory are most of a raw format's reading): InputError on an error
     /// or when the file ends sooner (it shrank since it was opened).
     void readAt(uint64_t offset, void* dst, size_t n) const;
-    /// Up to n bytes from `offset` into dst, on this thread; fewer where the file ends. Returns
-    /// how many. InputError on an error.
-    size_t readSome(uint64_t offset, void* dst, size_t n) const;
     /// The first bytes, up to most (fewer in a shorter file): where a header is looked for.
     std::vector<uint8_t> readHead(size_t most) const;
 

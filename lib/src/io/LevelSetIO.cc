@@ -1,20 +1,21 @@
 // LevelSetIO.cc - level sets in .vdb files: read (validated like every reader), written
-// atomically with a content-derived UUID, and described for `fluidsurf info`.
+// atomically with a content-derived UUID (VdbWrite.h), and described for `fluidsurf info`.
 #include <fluidsurf/Error.h>
-#include <fluidsurf/io/AtomicFile.h>
 #include <fluidsurf/io/LevelSetIO.h>
 
 #include "io/FileBuffer.h"
 #include "io/VdbGrids.h"
+#include "io/VdbWrite.h"
 
-#include <cerrno>
+#include <openvdb/tree/LeafManager.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
 #include <vector>
-
-#include <fcntl.h>
-#include <unistd.h>
 
 namespace fluidsurf {
 namespace io {
@@ -26,6 +27,38 @@ openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string&
 }
 
 namespace {
+
+/// InputError naming the first voxel or tile whose value is NaN or Inf: meshed, it became NaN
+/// or Inf vertices in the output. Tiles are visited once each, not voxel by voxel.
+void requireFiniteValues(const openvdb::FloatGrid& grid, const std::string& path)
+{
+    const openvdb::FloatTree& tree = grid.tree();
+    auto fail = [&](const openvdb::Coord& at, float v, const char* what) {
+        throw InputError(path + ": grid '" + grid.getName() + "' has the value " +
+                         std::to_string(v) + " at the " + what + " (" + std::to_string(at.x()) +
+                         ", " + std::to_string(at.y()) + ", " + std::to_string(at.z()) +
+                         "); a level set's values must be finite");
+    };
+    openvdb::FloatTree::ValueAllCIter tile = tree.cbeginValueAll();
+    tile.setMaxDepth(openvdb::FloatTree::ValueAllCIter::LEAF_DEPTH - 1);
+    for (; tile; ++tile)
+        if (!std::isfinite(*tile)) fail(tile.getCoord(), *tile, "tile");
+    const openvdb::tree::LeafManager<const openvdb::FloatTree> leaves(tree);
+    const size_t bad = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, leaves.leafCount()), leaves.leafCount(),
+        [&](const tbb::blocked_range<size_t>& r, size_t first) {
+            for (size_t i = r.begin(); i < r.end() && i < first; ++i) {
+                const float* v = leaves.leaf(i).buffer().data();
+                for (openvdb::Index k = 0; k < openvdb::FloatTree::LeafNodeType::SIZE; ++k)
+                    if (!std::isfinite(v[k])) return i;
+            }
+            return first;
+        },
+        [](size_t a, size_t b) { return std::min(a, b); });
+    if (bad == leaves.leafCount()) return;
+    for (auto v = leaves.leaf(bad).cbeginValueAll(); v; ++v)
+        if (!std::isfinite(*v)) fail(v.getCoord(), *v, "voxel");
+}
 
 /// The grid to mesh among grids (see readLevelSet).
 openvdb::FloatGrid::Ptr pickLevelSet(const openvdb::GridPtrVec& grids, const std::string& path,
@@ -59,6 +92,7 @@ openvdb::FloatGrid::Ptr pickLevelSet(const openvdb::GridPtrVec& grids, const std
     if (!std::isfinite(levelSet->background()))
         throw InputError(path + ": grid '" + levelSet->getName() +
                          "' has a background that is not finite");
+    requireFiniteValues(*levelSet, path);
     return levelSet;
 }
 
@@ -77,79 +111,18 @@ LevelSetFile readLevelSetFile(const std::string& path, const std::string& gridNa
     LevelSetFile f;
     if (gridName.empty()) f.adaptive = AdaptiveGrid::fromGrids(*grids, path);
     f.grid = f.adaptive.empty() ? pickLevelSet(*grids, path, gridName) : f.adaptive.level2;
+    if (!f.adaptive.empty())
+        for (const openvdb::GridBase::Ptr& g : *grids)
+            if (auto levels = openvdb::gridPtrCast<openvdb::FloatGrid>(g))
+                requireFiniteValues(*levels, path);
     return f;
 }
 
-namespace {
-// OpenVDB's file header: magic (8 bytes), file version, library major and minor (4 each), the
-// grid-offsets flag (1), then a random UUID as 36 characters. The UUID only identifies a file
-// for caches, so a hash of the content serves better: equal grids give equal bytes.
-constexpr size_t kUuidOffset = 8 + 4 + 4 + 4 + 1, kUuidLength = 36;
-
-/// The file's bytes after the UUID, hashed as they are read back a chunk at a time. Read into
-/// one vector through a stream iterator, the file took as long as OpenVDB took to write it (0.37
-/// s of the 1.7M-particle frame's 0.85 s `write`) and held a second copy of it at the peak.
-void makeUuidDeterministic(const std::string& path)
-{
-    const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
-    if (fd < 0) throw OutputError(path + ": cannot read back the written file");
-    struct Closer
-    {
-        int fd;
-        ~Closer() { ::close(fd); }
-    } closer{fd};
-    // (pread returns short counts only at the end of the file or when interrupted)
-    auto readAt = [&](uint8_t* to, size_t n, size_t at) {
-        size_t done = 0;
-        while (done < n) {
-            const ssize_t got = ::pread(fd, to + done, n - done, off_t(at + done));
-            if (got < 0 && errno == EINTR) continue;
-            if (got < 0) throw OutputError(path + ": cannot read back the written file");
-            if (got == 0) break;
-            done += size_t(got);
-        }
-        return done;
-    };
-    uint8_t head[kUuidOffset + kUuidLength];
-    if (readAt(head, sizeof head, 0) < sizeof head || head[kUuidOffset + 8] != '-' ||
-        head[kUuidOffset + 13] != '-')
-        throw OutputError(path + ": unexpected VDB header layout (OpenVDB version?)");
-    constexpr size_t kChunk = size_t(4) << 20;
-    const std::unique_ptr<uint8_t[]> chunk(new uint8_t[kChunk]);
-    uint64_t h0 = 0xcbf29ce484222325ull, h1 = 0x84222325cbf29ce4ull; // two FNV-1a streams
-    for (size_t at = sizeof head;;) {
-        const size_t got = readAt(chunk.get(), kChunk, at);
-        for (size_t i = 0; i < got; ++i) {
-            h0 = (h0 ^ chunk[i]) * 0x100000001b3ull;
-            h1 = (h1 ^ chunk[i] ^ 0x5a) * 0x100000001b3ull;
-        }
-        if (got < kChunk) break;
-        at += got;
-    }
-    char uuid[40];
-    std::snprintf(uuid, sizeof(uuid), "%08x-%04x-%04x-%04x-%012llx", unsigned(h0 >> 32),
-                  unsigned(h0 >> 16) & 0xffff, (unsigned(h0) & 0x0fff) | 0x4000,
-                  (unsigned(h1 >> 48) & 0x3fff) | 0x8000,
-                  (unsigned long long)(h1 & 0xffffffffffffull));
-    if (::pwrite(fd, uuid, kUuidLength, off_t(kUuidOffset)) != ssize_t(kUuidLength))
-        throw OutputError(path + ": cannot write the file header");
-}
-} // namespace
-
 void writeLevelSet(const openvdb::GridPtrVec& grids, const std::string& path)
 {
-    openvdb::initialize();
-    io::AtomicFile out(path);
-    try {
-        openvdb::io::File file(out.tempPath());
-        file.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
-        file.write(grids);
-        file.close();
-    } catch (const openvdb::Exception& e) {
-        throw OutputError(path + ": " + e.what());
-    }
-    makeUuidDeterministic(out.tempPath());
-    out.commit();
+    io_internal::writeVdbFile(openvdb::GridCPtrVec(grids.begin(), grids.end()), path,
+                              openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK,
+                              /*uuidFromContent=*/true);
 }
 
 std::vector<GridDescription> describeVdb(const std::string& path, std::vector<std::string>* skipped)

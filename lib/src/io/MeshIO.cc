@@ -236,6 +236,12 @@ void writeMesh(const TriangleMesh& mesh, const std::string& path,
                 throw OutputError(path + ": attribute '" + a.name + "' has the value " +
                                   std::to_string(v) + ", beyond 32-bit integers");
     }
+    // the last guard before a file: no NaN or Inf ever reaches one (a bad input is refused where
+    // it is read; this catches whatever a stage would still make of it)
+    for (size_t i = 0; i < mesh.points.size(); ++i)
+        if (!mesh.points[i].isFinite())
+            throw OutputError(path + ": vertex " + std::to_string(i + 1) +
+                              " is not finite (NaN or Inf); nothing written");
     // a block at a time (the text of a 1.7M-particle frame's OBJ is 200 MB)
     StreamFile out(path);
     if (format == MeshFormat::Obj)

@@ -14,6 +14,8 @@
 
 #include "util/Memory.h"
 
+#include <cstdio>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -240,6 +242,24 @@ TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path,
     return m;
 }
 
+/// InputError at the first vertex that is not finite or lies past kMaxCoordinate: one NaN turned
+/// every vertex of `post`'s output into NaN (its quadrics and normals sum over neighbours), one
+/// at 1e38 pulled most of them to the origin.
+TriangleMesh requireFiniteVertices(TriangleMesh m, const std::string& source)
+{
+    for (size_t i = 0; i < m.points.size(); ++i)
+        if (!m.points[i].isWithinRange()) {
+            char text[200];
+            std::snprintf(text, sizeof(text),
+                          ": vertex %zu of %zu is at (%g, %g, %g); coordinates must be finite and "
+                          "within +-%g",
+                          i + 1, m.points.size(), double(m.points[i].x), double(m.points[i].y),
+                          double(m.points[i].z), kMaxCoordinate);
+            throw InputError(source + text);
+        }
+    return m;
+}
+
 } // namespace
 
 TriangleMesh readMeshFromMemory(const uint8_t* data, size_t size, MeshFormat format,
@@ -249,10 +269,12 @@ TriangleMesh readMeshFromMemory(const uint8_t* data, size_t size, MeshFormat for
         throw InputError(source + ": cannot read this mesh type (readable: .obj .ply; .vtk "
                                   "meshes are written only)");
     if (size == 0) throw InputError(source + ": file is empty");
-    if (format == MeshFormat::Ply) return readPly(data, size, source, dropped);
+    if (format == MeshFormat::Ply)
+        return requireFiniteVertices(readPly(data, size, source, dropped), source);
     TriangleMesh m;
-    if (io_internal::readObjInParallel(data, size, m)) return m;
-    return readObj(data, size, source);
+    if (io_internal::readObjInParallel(data, size, m))
+        return requireFiniteVertices(std::move(m), source);
+    return requireFiniteVertices(readObj(data, size, source), source);
 }
 
 TriangleMesh readMesh(const std::string& path, std::vector<std::string>* dropped)

@@ -40,7 +40,7 @@ public:
 
 private:
     AtomicFile mFile;
-    int mFd = -1;
+    int mFd;                                 ///< mFile's temporary
     uint64_t mWritten = 0, mWrittenBack = 0; ///< bytes written, and handed to the disk
 };
 

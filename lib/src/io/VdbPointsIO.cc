@@ -7,9 +7,9 @@
 // are bucketed by voxel), so a round trip keeps each particle, not their order.
 #include "io/Formats.h"
 #include "io/VdbGrids.h"
+#include "io/VdbWrite.h"
 
 #include <fluidsurf/Error.h>
-#include <fluidsurf/io/AtomicFile.h>
 
 #include <openvdb/openvdb.h>
 #include <openvdb/points/PointConversion.h>
@@ -267,16 +267,9 @@ void writeVdbPoints(const ParticleSet& ps, const std::string& path, bool compres
     }
     grid->setName("points");
     grid->insertMeta("fluidsurf_particle_count", vdb::Int64Metadata(int64_t(ps.size())));
-    io::AtomicFile out(path);
-    try {
-        openvdb::io::File file(out.tempPath());
-        file.setCompression(compress ? openvdb::io::COMPRESS_BLOSC : openvdb::io::COMPRESS_NONE);
-        file.write(vdb::GridPtrVec{grid});
-        file.close();
-    } catch (const std::exception& e) {
-        throw OutputError(path + ": cannot write VDB: " + e.what());
-    }
-    out.commit();
+    io_internal::writeVdbFile({grid}, path,
+                              compress ? openvdb::io::COMPRESS_BLOSC : openvdb::io::COMPRESS_NONE,
+                              /*uuidFromContent=*/false);
 }
 
 } // namespace io_internal

@@ -469,15 +469,6 @@ Affine::Affine(const openvdb::math::Transform& xform)
     jacobianInverse = map->getConstJacobianInv();
 }
 
-const openvdb::FloatTree& leafOnlyTree(const openvdb::FloatGrid& grid,
-                                       openvdb::FloatTree::Ptr& keep)
-{
-    if (!grid.tree().hasActiveTiles()) return grid.tree();
-    keep = std::make_shared<FloatTree>(grid.tree());
-    keep->voxelizeActiveTiles();
-    return *keep;
-}
-
 void checkVertexCount(uint64_t vertices)
 {
     // Vertex numbers are 32 bits; the meshes here stay under 2^31 vertices.
@@ -528,9 +519,9 @@ void dropUnusedVertices(TriangleMesh& mesh, Context& ctx)
 TriangleMesh marchingCubes(const openvdb::FloatGrid& grid, Context& ctx, size_t* surfaceCells,
                            RawNormals normals)
 {
-    // Active tiles become voxels so that every active value is a leaf voxel.
+    // Active tiles' faces become voxels so that every value the mesh needs is a leaf voxel.
     openvdb::FloatTree::Ptr voxelized;
-    const FloatTree* tree = &leafOnlyTree(grid, voxelized);
+    const FloatTree* tree = &leafOnlyTree(grid, voxelized, ctx);
     Leaves leaves(*tree);
     Passes passes{*tree, Affine(grid.transform()), leaves, ctx, {}, {}, {}, {}, {}};
     TriangleMesh mesh;

@@ -42,10 +42,12 @@ struct Affine
     explicit Affine(const openvdb::math::Transform& xform);
 };
 
-/// The tree the passes mesh: grid's, or a copy with its active tiles made voxels (rare in level
-/// sets), held in keep.
+/// The tree the passes mesh: grid's, or for a grid with active tiles (rare in level sets) a
+/// copy, held in keep, whose tiles are inactive and whose voxels where a tile's face can carry
+/// the surface are active leaf voxels (ActiveTiles.cc): the voxelized grid's surface, at a cost
+/// in the tiles' faces. ValueError past ctx's memory budget, with the estimate.
 const openvdb::FloatTree& leafOnlyTree(const openvdb::FloatGrid& grid,
-                                       openvdb::FloatTree::Ptr& keep);
+                                       openvdb::FloatTree::Ptr& keep, Context& ctx);
 
 /// ValueError where a mesh would have 2^31 vertices or more (vertex numbers are 32 bits).
 void checkVertexCount(uint64_t vertices);

@@ -2,6 +2,7 @@
 #include "mesh/VolumeToMesh.h"
 
 #include "mesh/Gradient.h"
+#include "mesh/MarchingCubes.h"
 
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/VolumeToMesh.h>
@@ -16,7 +17,18 @@ TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid, Context& ctx)
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
     std::vector<openvdb::Vec4I> quads;
-    openvdb::tools::volumeToMesh(grid, points, triangles, quads, 0.0, 0.0, true);
+    // active tiles as our mesher takes them (MarchingCubes.h): OpenVDB's own handling of them
+    // went past 8 GB on some layouts
+    openvdb::FloatTree::Ptr keep;
+    const openvdb::FloatTree& tree = leafOnlyTree(grid, keep, ctx);
+    if (keep) {
+        openvdb::FloatGrid tiled(keep);
+        tiled.setTransform(grid.transform().copy());
+        tiled.setGridClass(grid.getGridClass());
+        openvdb::tools::volumeToMesh(tiled, points, triangles, quads, 0.0, 0.0, true);
+    } else {
+        openvdb::tools::volumeToMesh(grid, points, triangles, quads, 0.0, 0.0, true);
+    }
 
     TriangleMesh mesh;
     mesh.points.resize(points.size());
@@ -25,7 +37,7 @@ TriangleMesh openvdbVolumeToMesh(const openvdb::FloatGrid& grid, Context& ctx)
     tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size(), 1024),
                       [&](const tbb::blocked_range<size_t>& r) {
                           ctx.checkpoint();
-                          FloatAccessor acc(grid.tree());
+                          FloatAccessor acc(tree);
                           for (size_t i = r.begin(); i != r.end(); ++i) {
                               const openvdb::Vec3s& p = points[i];
                               mesh.points[i] = Vec3f(p.x(), p.y(), p.z());

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace fluidsurf {
@@ -78,6 +79,26 @@ struct BandBuilder
     /// a time: the joins were most of this step's time on 16 threads.)
     void join(BandBuilder& other) { tree->merge(*other.tree, openvdb::MERGE_ACTIVE_STATES); }
 };
+/// Bytes a band voxel costs at least on its way to the level set: its float value, its share
+/// of the leaf's masks and of the field's block.
+constexpr double kBytesPerBandVoxel = 8;
+
+/// ValueError with the estimate before a band that cannot fit is built (issue 63: a voxel of
+/// 0.03 r on a 32k-particle frame took 23.7 GB and the machine with it). Each seed adds the
+/// voxels of its box, at most; as a rule its share of the surface, about a spacing (2r)
+/// squared, times the band's thickness.
+void requireBandMemory(size_t seeds, const Params& params, const Level& level, double width,
+                       Context& ctx)
+{
+    const double dx = level.voxelSize, spacing = 2 * params.radius;
+    const double box = std::pow(2 * width / dx + 1, 3);
+    const double perSeed = std::min(box, spacing * spacing * (2 * width + dx) / (dx * dx * dx));
+    char what[200];
+    std::snprintf(what, sizeof(what),
+                  "the narrow band of %zu surface particles at a voxel of %g (%g r)", seeds, dx,
+                  dx / params.radius);
+    ctx.requireMemory(double(seeds) * perSeed * kBytesPerBandVoxel, what);
+}
 } // namespace
 
 openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
@@ -90,6 +111,7 @@ openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
         const uint8_t c = classes.classes[i];
         return classify::isSurface(c) || (params.keepIsolated && c == classify::Isolated);
     });
+    requireBandMemory(marked.count(), params, level, width, ctx);
     std::vector<uint32_t> seeds(marked.count());
     marked.forEach([&](size_t i, bool seed, size_t k) {
         if (seed) seeds[k - 1] = uint32_t(i);

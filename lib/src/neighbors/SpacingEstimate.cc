@@ -14,6 +14,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
+#include <vector>
 
 namespace fluidsurf {
 
@@ -33,6 +35,100 @@ constexpr double kBulk = 0.9;
 /// neighbourhood) has no bulk whose density could be the rest density: scattered or random
 /// points, a shell, a thin sheet. Its nearest-neighbour spacing stands.
 constexpr uint32_t kMinBulkNeighbours = 40;
+/// Particles of one cell that a query visits at most: an even sample of a fuller cell, each
+/// standing for `step` of them (see SpacingEstimate.h). Cells are about a spacing wide, so real
+/// frames hold a few particles a cell.
+constexpr uint32_t kCellVisits = 2048;
+
+/// The stride through a cell's range that visits at most kCellVisits of its particles (the
+/// density sums, an estimate: a fuller cell's particles evenly sampled, each standing for
+/// stride of them).
+inline uint32_t strideOf(const neighbors::CellRange& range)
+{
+    const uint32_t n = range.end - range.begin;
+    return n > kCellVisits ? (n + kCellVisits - 1) / kCellVisits : 1;
+}
+
+/// A cell too full to scan whole for each query (a pile of coincident or near-coincident
+/// particles, or cells made huge by a far outlier: 200,000 particles at one point took minutes):
+/// its particles sorted along its widest axis, so that a nearest-neighbour query scans outwards
+/// from its own place and stops where that axis alone puts the rest past the best distance, or
+/// at a distance of 0. Exact, as the plain scan.
+struct SortedCell
+{
+    int axis = 0;
+    std::vector<float> keys;     ///< the positions along axis, ascending
+    std::vector<uint32_t> order; ///< the particles (index order) in that order
+};
+
+/// Every cell holding more than kCellVisits particles, sorted (by its range's begin).
+std::unordered_map<uint32_t, SortedCell> sortFullCells(const neighbors::CellIndex& index,
+                                                       Context& ctx)
+{
+    std::vector<neighbors::CellRange> full;
+    for (uint32_t t = 0; t < uint32_t(index.size());) {
+        const Vec3f& p = index.positions[t];
+        const neighbors::CellRange r =
+            index.find(index.cellCoord(p.x, 0), index.cellCoord(p.y, 1), index.cellCoord(p.z, 2));
+        if (r.end <= t || r.begin > t) { // (not where the index puts it: cannot happen)
+            ++t;
+            continue;
+        }
+        if (r.end - r.begin > kCellVisits) full.push_back(r);
+        t = r.end;
+    }
+    std::vector<SortedCell> sorted(full.size());
+    tbb::parallel_for(size_t(0), full.size(), [&](size_t c) {
+        ctx.checkpoint();
+        const neighbors::CellRange r = full[c];
+        BBox3f box;
+        for (uint32_t u = r.begin; u < r.end; ++u)
+            box.expand(index.positions[u]);
+        SortedCell& s = sorted[c];
+        for (int a = 1; a < 3; ++a)
+            if (box.max[a] - box.min[a] > box.max[s.axis] - box.min[s.axis]) s.axis = a;
+        for (uint32_t u = r.begin; u < r.end; ++u)
+            s.order.push_back(u);
+        std::sort(s.order.begin(), s.order.end(), [&](uint32_t a, uint32_t b) {
+            return index.positions[a][s.axis] < index.positions[b][s.axis] ||
+                   (index.positions[a][s.axis] == index.positions[b][s.axis] && a < b);
+        });
+        for (uint32_t u : s.order)
+            s.keys.push_back(index.positions[u][s.axis]);
+    });
+    std::unordered_map<uint32_t, SortedCell> byBegin;
+    for (size_t c = 0; c < full.size(); ++c)
+        byBegin.emplace(full[c].begin, std::move(sorted[c]));
+    return byBegin;
+}
+
+/// best = min(best, squared distance from p (particle self) to the cell's particles), scanning
+/// outwards from p's place along the cell's axis (see SortedCell).
+void nearestInSortedCell(const neighbors::CellIndex& index, const SortedCell& cell, const Vec3f& p,
+                         uint32_t self, double& best)
+{
+    const double key = p[cell.axis];
+    const size_t mid = size_t(std::lower_bound(cell.keys.begin(), cell.keys.end(), float(key)) -
+                              cell.keys.begin());
+    auto visit = [&](size_t i) {
+        const uint32_t u = cell.order[i];
+        if (u == self) return;
+        const Vec3f& o = index.positions[u];
+        const double dx = double(o.x) - p.x, dy = double(o.y) - p.y, dz = double(o.z) - p.z;
+        best = std::min(best, dx * dx + dy * dy + dz * dz);
+    };
+    for (size_t i = mid; i < cell.keys.size() && best > 0; ++i) {
+        const double d = double(cell.keys[i]) - key;
+        if (d * d > best) break;
+        visit(i);
+    }
+    for (size_t i = mid; i-- > 0 && best > 0;) {
+        const double d = key - double(cell.keys[i]);
+        if (d * d > best) break;
+        visit(i);
+    }
+}
+
 /// Nearest-neighbour distances this close to each other (the middle half within this share of
 /// their median) mark ordered particles: a lattice, whose nearest distance is its spacing.
 constexpr double kOrdered = 0.01;
@@ -69,7 +165,7 @@ void axisGapsWithin(const neighbors::CellIndex& index, const Vec3f& p, int64_t c
 /// sampled particle sums a poly6 kernel (support kSupport spacings) over the particles in its
 /// reach, itself included (see kBulk for the bulk's); two rounds from `start`, each with the
 /// support of the spacing the last one found. 0 where there is no bulk (kMinBulkNeighbours).
-double densitySpacing(const neighbors::CellIndex& index, double cell, double start)
+double densitySpacing(const neighbors::CellIndex& index, double cell, double start, Context& ctx)
 {
     const size_t n = index.size(), samples = std::min(n, kDensitySamples);
     double spacing = start;
@@ -82,6 +178,7 @@ double densitySpacing(const neighbors::CellIndex& index, double cell, double sta
         std::vector<uint32_t> count(samples);
         tbb::parallel_for(
             tbb::blocked_range<size_t>(0, samples, 256), [&](const tbb::blocked_range<size_t>& r) {
+                ctx.checkpoint();
                 std::vector<double> gap2(3 * width);
                 for (size_t s = r.begin(); s != r.end(); ++s) {
                     const Vec3f& p = index.positions[s * n / samples];
@@ -102,12 +199,13 @@ double densitySpacing(const neighbors::CellIndex& index, double cell, double sta
                                     continue;
                                 const neighbors::CellRange range =
                                     index.find(ci + di, cj + dj, ck + dk);
-                                for (uint32_t u = range.begin; u < range.end; ++u) {
+                                const uint32_t step = strideOf(range);
+                                for (uint32_t u = range.begin; u < range.end; u += step) {
                                     const Vec3f& o = index.positions[u];
                                     const double dx = double(o.x) - p.x, dy = double(o.y) - p.y,
                                                  dz = double(o.z) - p.z;
                                     const double t = support2 - (dx * dx + dy * dy + dz * dz);
-                                    if (t > 0) sum += t * t * t, ++count[s];
+                                    if (t > 0) sum += step * t * t * t, count[s] += step;
                                 }
                             }
                     density[s] = sum * norm;
@@ -139,6 +237,12 @@ double densitySpacing(const neighbors::CellIndex& index, double cell, double sta
 
 SpacingEstimate estimateSpacing(const ParticleSet& ps, size_t maxSamples)
 {
+    Context ctx; // (a fraction of a second: no progress to report)
+    return estimateSpacing(ps, ctx, maxSamples);
+}
+
+SpacingEstimate estimateSpacing(const ParticleSet& ps, Context& ctx, size_t maxSamples)
+{
     SpacingEstimate est;
     const size_t n = ps.size();
     if (n < 2) return est;
@@ -160,7 +264,6 @@ SpacingEstimate estimateSpacing(const ParticleSet& ps, size_t maxSamples)
     if (!(cell > 0) || !std::isfinite(cell)) cell = maxExt;
     cell = std::max(cell, maxExt * 1e-6);
 
-    Context ctx; // (a fraction of a second: no progress to report)
     const neighbors::CellIndex index =
         neighbors::buildCellIndex(ps.positions.data(), nullptr, n, cell, ctx);
 
@@ -178,9 +281,11 @@ SpacingEstimate estimateSpacing(const ParticleSet& ps, size_t maxSamples)
         const uint64_t q = uint64_t(s) * n / samples;
         isSampled[q / 64] |= uint64_t(1) << (q % 64);
     }
+    const std::unordered_map<uint32_t, SortedCell> fullCells = sortFullCells(index, ctx);
     constexpr int kWidth = 2 * kMaxShell + 1;
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& r) {
+            ctx.checkpoint();
             double gap2[3 * kWidth];
             for (size_t t = r.begin(); t != r.end(); ++t) {
                 const size_t q = index.order[t];
@@ -207,7 +312,12 @@ SpacingEstimate estimateSpacing(const ParticleSet& ps, size_t maxSamples)
                                     continue;
                                 const neighbors::CellRange range =
                                     index.find(ci + di, cj + dj, ck + dk);
-                                for (uint32_t u = range.begin; u < range.end; ++u) {
+                                if (range.end - range.begin > kCellVisits) {
+                                    nearestInSortedCell(index, fullCells.at(range.begin), p,
+                                                        uint32_t(t), best);
+                                    continue;
+                                }
+                                for (uint32_t u = range.begin; u < range.end && best > 0; ++u) {
                                     if (u == t) continue;
                                     const Vec3f& o = index.positions[u];
                                     const double dx = double(o.x) - p.x, dy = double(o.y) - p.y,
@@ -245,7 +355,7 @@ SpacingEstimate estimateSpacing(const ParticleSet& ps, size_t maxSamples)
     const double quarter = found[low], threeQuarters = found[high];
     const bool ordered = threeQuarters - quarter <= kOrdered * est.medianNearest;
     if (dims == 3 && !ordered) {
-        const double fromDensity = densitySpacing(index, cell, est.medianNearest);
+        const double fromDensity = densitySpacing(index, cell, est.medianNearest, ctx);
         if (fromDensity > 0) est.spacing = fromDensity, est.fromDensity = true;
     }
     est.radius = est.spacing / 2;

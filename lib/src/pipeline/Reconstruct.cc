@@ -11,7 +11,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <vector>
 
 namespace fluidsurf {
 
@@ -92,6 +94,30 @@ const char* radiusSourceName(RadiusSource s)
     return "?";
 }
 
+namespace {
+/// r is the attribute's largest value: one absurd value (a pscale of 1e30 among 0.025s) made
+/// every length absurd and the mesh empty. ValueError when the largest passes 1000 times the
+/// median, naming the particle.
+void requireSaneRadii(const Attribute& a)
+{
+    if (a.floats.empty()) return;
+    std::vector<float> sorted(a.floats);
+    const auto middle = sorted.begin() + ptrdiff_t(sorted.size() / 2);
+    std::nth_element(sorted.begin(), middle, sorted.end());
+    const double median = *middle, limit = 1000 * median;
+    if (!(median > 0)) return; // (non-positive radii are refused where they are used)
+    for (size_t i = 0; i < a.floats.size(); ++i)
+        if (!(a.floats[i] <= limit)) {
+            char text[300];
+            std::snprintf(text, sizeof(text),
+                          "radius attribute '%s' of particle %zu is %g, over 1000 times the "
+                          "median %g; fix it, or ignore the attribute and give -r",
+                          a.name.c_str(), i, double(a.floats[i]), median);
+            throw ValueError(text);
+        }
+}
+} // namespace
+
 RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute)
 {
     Context ctx;
@@ -109,6 +135,7 @@ RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute
         if (const Attribute* a = ps.find(AttributeRole::Radius)) {
             const float r =
                 a->floats.empty() ? 0.f : *std::max_element(a->floats.begin(), a->floats.end());
+            requireSaneRadii(*a);
             if (r > 0) {
                 c.radius = r, c.source = RadiusSource::Attribute;
                 c.detail = "largest value of the attribute '" + a->name + "'";
@@ -117,7 +144,7 @@ RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute
         }
     const SpacingEstimate est = [&] {
         const auto t = ctx.scope("radius estimate");
-        return util::withThreads(ctx, [&] { return estimateSpacing(ps); });
+        return util::withThreads(ctx, [&] { return estimateSpacing(ps, ctx); });
     }();
     if (!(est.radius > 0))
         throw ValueError("cannot estimate the particle radius (fewer than two particles, or all "

@@ -13,6 +13,7 @@
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+#include <OpenMesh/Tools/Decimater/Observer.hh>
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic pop
 #endif
@@ -25,10 +26,39 @@ namespace post {
 
 namespace {
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+
+/// The context's checkpoint every 1000 collapses; a cancel there stops the decimater.
+class CancelObserver : public OpenMesh::Decimater::Observer
+{
+public:
+    explicit CancelObserver(Context& ctx) : Observer(1000), mCtx(ctx) {}
+    void notify(size_t) override
+    {
+        try {
+            mCtx.checkpoint();
+        } catch (const Cancelled&) {
+            mStop = true;
+        }
+    }
+    bool abort() const override { return mStop || mCtx.cancelled(); }
+
+private:
+    Context& mCtx;
+    bool mStop = false;
+};
+
+/// OpenMesh says what it refuses on its own stream (`PolyMeshT::add_face: complex edge`): a
+/// second message beside ours. Quiet while it lives.
+struct QuietOpenMesh
+{
+    QuietOpenMesh() { omerr().disable(); }
+    ~QuietOpenMesh() { omerr().enable(); }
+};
 } // namespace
 
-TriangleMesh decimateOpenMesh(const TriangleMesh& in, size_t targetTriangles)
+TriangleMesh decimateOpenMesh(const TriangleMesh& in, size_t targetTriangles, Context& ctx)
 {
+    const QuietOpenMesh quiet;
     OmMesh m;
     std::vector<OmMesh::VertexHandle> handles;
     handles.reserve(in.points.size());
@@ -49,7 +79,11 @@ TriangleMesh decimateOpenMesh(const TriangleMesh& in, size_t targetTriangles)
     decimater.add(flipping);
     decimater.module(quadric).unset_max_err();
     decimater.initialize();
+    CancelObserver observer(ctx);
+    decimater.set_observer(&observer);
     decimater.decimate_to_faces(0, targetTriangles);
+    decimater.set_observer(nullptr);
+    if (observer.abort()) throw Cancelled("cancelled");
     m.garbage_collection();
 
     TriangleMesh out;

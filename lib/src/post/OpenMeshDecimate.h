@@ -2,6 +2,7 @@
 // the baseline our own decimation is measured against. OpenMesh types stay in the .cc.
 #pragma once
 
+#include <fluidsurf/Context.h>
 #include <fluidsurf/Mesh.h>
 
 #include <cstddef>
@@ -14,7 +15,9 @@ namespace post {
 /// at most targetTriangles remain (fewer legal collapses stop it earlier). The result is compact
 /// (no unused vertices), without normals (Normals.h). ValueError for a mesh OpenMesh cannot take
 /// (a non-manifold triangle).
-TriangleMesh decimateOpenMesh(const TriangleMesh& mesh, size_t targetTriangles);
+/// ctx's checkpoint every 1000 collapses: a cancel stops the decimater and throws Cancelled
+/// (it went on for its minutes, signals or not).
+TriangleMesh decimateOpenMesh(const TriangleMesh& mesh, size_t targetTriangles, Context& ctx);
 
 } // namespace post
 } // namespace fluidsurf

@@ -119,7 +119,7 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
                 : 0;
         if (params.decimator == Decimator::OpenMesh) {
             // its points cannot be traced back: volumes are kept from here on
-            mesh = post::decimateOpenMesh(mesh, target);
+            mesh = post::decimateOpenMesh(mesh, target, ctx);
             before = post::findComponents(mesh);
             component = before.ofPoint;
             post::markClosed(before, mesh, component);

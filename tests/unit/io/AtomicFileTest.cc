@@ -1,18 +1,25 @@
-// AtomicFileTest.cc - outputs of one frame appear together or not at all, and temporaries that
-// a killed run left behind are removed by the next run in the folder.
+// AtomicFileTest.cc - outputs of one frame appear together or not at all; temporaries that a
+// killed run left behind are removed by a later run, and only those; names and targets that
+// could not be written are refused before a byte is.
 #include "TestData.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/io/AtomicFile.h>
 
 #include "io/StreamFile.h"
+#include "io/Temporaries.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
 #include <dirent.h>
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+#include <ctime>
 
 #include <cerrno>
 #include <string>
@@ -112,23 +119,103 @@ TEST(StreamFile, AnErrorWhileEncodingLeavesNoFile)
     EXPECT_TRUE(listFolder(dir.path()).empty());
 }
 
-TEST(AtomicFile, RemovesTemporariesOfKilledRuns)
+/// A file's modification time set seconds ago.
+void age(const std::string& path, double seconds)
+{
+    struct timespec times[2];
+    ::clock_gettime(CLOCK_REALTIME, &times[0]);
+    times[0].tv_sec -= time_t(seconds);
+    times[1] = times[0];
+    ASSERT_EQ(::utimensat(AT_FDCWD, path.c_str(), times, 0), 0);
+}
+
+// A temporary is stale only when nobody holds its lock and it has not been touched for the
+// given age. A PID says nothing: a live run in another PID namespace (a container) or on another
+// host sharing the folder has a PID that is not running here, and its temporary was deleted
+// under it (issue 63).
+TEST(AtomicFile, RemovesOnlyProvablyStaleTemporaries)
 {
     const test::TempDir dir;
-    // A PID that runs no process, and one that does (this one).
-    pid_t dead = 4000000;
+    pid_t dead = 4000000; // a PID that runs no process here
     while (dead > 2 && (::kill(dead, 0) == 0 || errno != ESRCH))
         --dead;
-    const std::string stale = ".fluidsurf-tmp-" + std::to_string(dead) + "-3.frame.obj";
-    const std::string live = ".fluidsurf-tmp-" + std::to_string(::getpid()) + "-99.frame.vdb";
-    test::writeFile(dir.path(stale), "left by a killed run");
-    test::writeFile(dir.path(live), "being written");
-    test::writeFile(dir.path(".fluidsurf-tmp-x.obj"), "not ours: no PID");
-    io::writeFileAtomic(dir.path("out.obj"), "x", 1);
+    const std::string stale = ".fluidsurf-0123456789ab.obj", legacy = ".fluidsurf-tmp-7-3.f.obj",
+                      otherNamespace = ".fluidsurf-tmp-" + std::to_string(dead) + "-1.f.vdb",
+                      fresh = ".fluidsurf-zyxwvutsrqpo.ply", notOurs = ".fluidsurf-x.obj",
+                      user = "fluidsurf-0123456789ab.obj";
+    for (const std::string& name : {stale, legacy, otherNamespace, fresh, notOurs, user}) {
+        test::writeFile(dir.path(name), "bytes");
+        if (name != fresh) age(dir.path(name), 7200);
+    }
+    // the live run elsewhere holds its lock (flock: another open file description conflicts,
+    // in this process as in any other)
+    const int held = ::open(dir.path(otherNamespace).c_str(), O_RDONLY);
+    ASSERT_GE(held, 0);
+    ASSERT_EQ(::flock(held, LOCK_EX), 0);
+    EXPECT_EQ(io_internal::removeStaleTemporaries(dir.path(), 3600), 2);
     EXPECT_FALSE(test::fileExists(dir.path(stale)));
-    EXPECT_TRUE(test::fileExists(dir.path(live)));
-    EXPECT_TRUE(test::fileExists(dir.path(".fluidsurf-tmp-x.obj")));
-    EXPECT_EQ(test::readFileBytes(dir.path("out.obj")), "x");
+    EXPECT_FALSE(test::fileExists(dir.path(legacy)));
+    EXPECT_TRUE(test::fileExists(dir.path(otherNamespace))) << "a locked temporary was removed";
+    EXPECT_TRUE(test::fileExists(dir.path(fresh))) << "a recent temporary was removed";
+    EXPECT_TRUE(test::fileExists(dir.path(notOurs)));
+    EXPECT_TRUE(test::fileExists(dir.path(user)));
+    ::close(held); // the run ended without renaming: now it is stale
+    EXPECT_EQ(io_internal::removeStaleTemporaries(dir.path(), 3600), 1);
+    EXPECT_FALSE(test::fileExists(dir.path(otherNamespace)));
+}
+
+// A live AtomicFile's temporary survives another run's sweep even at age 0: its lock is held.
+TEST(AtomicFile, ALiveTemporaryIsLocked)
+{
+    const test::TempDir dir;
+    io::AtomicFile file(dir.path("frame.bgeo.gz"));
+    const std::string temp = file.tempPath();
+    EXPECT_TRUE(io_internal::isTemporaryName(temp.substr(temp.find_last_of('/') + 1))) << temp;
+    EXPECT_EQ(temp.substr(temp.size() - 8), ".bgeo.gz"); // the format is still in the name
+    EXPECT_EQ(io_internal::removeStaleTemporaries(dir.path(), 0), 0);
+    EXPECT_TRUE(test::fileExists(temp));
+}
+
+// Temporaries are short whatever the target's name: a valid 255-byte name (the most most file
+// systems allow) failed after the work when the temporary's name was the target's plus 20.
+TEST(AtomicFile, TheLongestValidNameCanBeWritten)
+{
+    const test::TempDir dir;
+    const std::string name = std::string(251, 'n') + ".obj";
+    ASSERT_EQ(name.size(), 255u);
+    io::writeFileAtomic(dir.path(name), "mesh", 4);
+    EXPECT_EQ(test::readFileBytes(dir.path(name)), "mesh");
+    EXPECT_EQ(listFolder(dir.path()).size(), 1u);
+}
+
+// A name that is not a regular file is never replaced; a link to a file stays a link and the
+// file it names gets the bytes.
+TEST(AtomicFile, RefusesNonRegularTargetsAndFollowsLinks)
+{
+    const test::TempDir dir;
+    ASSERT_EQ(::mkdir(dir.path("folder.obj").c_str(), 0755), 0);
+    ASSERT_EQ(::mkfifo(dir.path("fifo.obj").c_str(), 0644), 0);
+    for (const char* name : {"folder.obj", "fifo.obj"}) {
+        try {
+            io::writeFileAtomic(dir.path(name), "x", 1);
+            ADD_FAILURE() << name << " was replaced";
+        } catch (const OutputError& e) {
+            EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos)
+                << e.what();
+        }
+    }
+    struct stat st;
+    ASSERT_EQ(::lstat(dir.path("fifo.obj").c_str(), &st), 0);
+    EXPECT_TRUE(S_ISFIFO(st.st_mode));
+    test::writeFile(dir.path("real.obj"), "old");
+    ASSERT_EQ(::symlink("real.obj", dir.path("link.obj").c_str()), 0);
+    io::writeFileAtomic(dir.path("link.obj"), "new", 3);
+    ASSERT_EQ(::lstat(dir.path("link.obj").c_str(), &st), 0);
+    EXPECT_TRUE(S_ISLNK(st.st_mode)) << "the link was replaced by a file";
+    EXPECT_EQ(test::readFileBytes(dir.path("real.obj")), "new");
+    EXPECT_THROW(io::writeFileAtomic(dir.path("a") + std::string(1, '\0') + "b.obj", "x", 1),
+                 OutputError);
+    EXPECT_FALSE(test::fileExists(dir.path("a")));
 }
 
 } // namespace

@@ -14,7 +14,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace fluidsurf {
 namespace {
@@ -183,6 +185,68 @@ TEST(MeshReader, BadMeshesAreOneInputError)
     EXPECT_NE(message("d.ply", "not a ply\n").find("not a PLY file"), std::string::npos);
     EXPECT_THROW(io::readMesh(dir.path("missing.obj")), InputError);
     EXPECT_THROW(io::readMesh(dir.path("x.stl")), InputError);
+}
+
+// One NaN vertex turned every vertex of `post`'s output into NaN, one at 1e38 pulled most to the
+// origin (issue 63): refused where read, naming the file and the vertex.
+TEST(MeshReader, NonFiniteOrFarVerticesAreRefused)
+{
+    const test::TempDir dir;
+    const std::string tetra = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+                              "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    test::writeFile(dir.path("ok.obj"), tetra);
+    EXPECT_EQ(io::readMesh(dir.path("ok.obj")).points.size(), 4u);
+    for (const char* bad : {"nan", "inf", "-inf", "1e38", "2e15"}) {
+        std::string text = tetra;
+        text.replace(text.find("v 1 0 0"), 7, std::string("v 1 ") + bad + " 0");
+        const std::string path = dir.path(std::string("bad_") + bad + ".obj");
+        test::writeFile(path, text);
+        try {
+            io::readMesh(path);
+            ADD_FAILURE() << bad << ": no error";
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(path + ": vertex 2 of 4"), std::string::npos) << what;
+            EXPECT_NE(what.find("must be finite and within"), std::string::npos) << what;
+        }
+    }
+    // written meshes never hold one either
+    TriangleMesh m = io::readMesh(dir.path("ok.obj"));
+    m.points[3].z = NAN;
+    EXPECT_THROW(io::writeMesh(m, dir.path("out.obj")), OutputError);
+    EXPECT_FALSE(test::fileExists(dir.path("out.obj")));
+}
+
+// A level set with a NaN or Inf voxel or tile meshed to NaN/Inf vertices (issue 63): refused
+// where read, naming the file, the grid and where.
+TEST(LevelSetIO, NonFiniteValuesAreRefused)
+{
+    openvdb::initialize();
+    const test::TempDir dir;
+    const float nan = std::numeric_limits<float>::quiet_NaN(),
+                inf = std::numeric_limits<float>::infinity();
+    int k = 0;
+    for (const bool tile : {false, true})
+        for (const float bad : {nan, inf, -inf}) {
+            auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+                10.0f, openvdb::Vec3f(0), 1.0f);
+            if (tile)
+                sphere->tree().addTile(1, openvdb::Coord(64, 0, 0), bad, false);
+            else
+                sphere->tree().setValueOnly(openvdb::Coord(10, 0, 0), bad);
+            const std::string path = dir.path("bad" + std::to_string(k++) + ".vdb");
+            io::writeLevelSet({sphere}, path);
+            try {
+                io::readLevelSet(path);
+                ADD_FAILURE() << path << ": no error";
+            } catch (const InputError& e) {
+                const std::string what = e.what();
+                EXPECT_NE(what.find(path + ": grid"), std::string::npos) << what;
+                EXPECT_NE(what.find(tile ? "at the tile (64, 0, 0)" : "at the voxel (10, 0, 0)"),
+                          std::string::npos)
+                    << what;
+            }
+        }
 }
 
 } // namespace

@@ -19,8 +19,9 @@ namespace {
 
 TEST(OpenMeshDecimate, SphereKeepsItsShapeAtAQuarterOfTheTriangles)
 {
+    Context ctx;
     const TriangleMesh fine = post::unitIcosphere(4); // 5,120 triangles
-    const TriangleMesh coarse = post::decimateOpenMesh(fine, 1280);
+    const TriangleMesh coarse = post::decimateOpenMesh(fine, 1280, ctx);
     EXPECT_LE(coarse.triangles.size(), 1280u);
     EXPECT_GE(coarse.triangles.size(), 1200u);
     const MeshReport r = checkMesh(coarse);
@@ -35,13 +36,14 @@ TEST(OpenMeshDecimate, SphereKeepsItsShapeAtAQuarterOfTheTriangles)
 
 TEST(OpenMeshDecimate, SurfaceStaysClosedAtAFifthOfTheTriangles)
 {
+    Context ctx;
     SceneParams sp;
     sp.count = 20000;
     const ParticleSet ps = generateScene(Scene::Drop, sp);
     const TriangleMesh raw =
         meshLevelSet(*rasterizeParticles(ps, Params::fromRadius(sp.radius)).grid);
     const size_t target = raw.triangles.size() / 5; // the thesis' 80% removed
-    const TriangleMesh d = post::decimateOpenMesh(raw, target);
+    const TriangleMesh d = post::decimateOpenMesh(raw, target, ctx);
     EXPECT_LE(d.triangles.size(), target);
     const MeshReport before = checkMesh(raw), after = checkMesh(d);
     EXPECT_TRUE(after.watertight()) << describe(after);
@@ -51,11 +53,24 @@ TEST(OpenMeshDecimate, SurfaceStaysClosedAtAFifthOfTheTriangles)
 
 TEST(OpenMeshDecimate, NonManifoldInputIsAValueError)
 {
+    Context ctx;
     // three triangles on one edge
     TriangleMesh m;
     m.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
     m.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
-    EXPECT_THROW(post::decimateOpenMesh(m, 1), ValueError);
+    EXPECT_THROW(post::decimateOpenMesh(m, 1, ctx), ValueError);
+}
+
+// A cancel (Ctrl-C through the context) stops OpenMesh's serial decimater, which went on for its
+// minutes whatever the signals (issue 63).
+TEST(OpenMeshDecimate, ACancelStopsIt)
+{
+    const TriangleMesh fine = post::unitIcosphere(5); // 20,480 triangles
+    Context ctx;
+    size_t calls = 0;
+    ctx.setProgress([&](const ProgressEvent&) { return ++calls < 3; });
+    EXPECT_THROW(post::decimateOpenMesh(fine, 100, ctx), Cancelled);
+    EXPECT_EQ(calls, 3u);
 }
 
 } // namespace

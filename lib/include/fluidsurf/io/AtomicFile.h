@@ -10,10 +10,18 @@
 namespace fluidsurf {
 namespace io {
 
-/// A temporary path in the target's folder, ".fluidsurf-tmp-PID-N.NAME" (the target's name last,
-/// so its extension still says the format); commit() renames it over the target, the destructor
-/// removes it if commit() was never reached (an exception on the way). Temporaries that a killed
-/// run left in the folder (their PID no longer runs) are removed when the next one is made.
+/// A temporary beside the target, ".fs-RANDOM.EXT" (EXT the target's extension, so that the
+/// format is still known from the name; short, so that any valid target name has a valid
+/// temporary), created with O_EXCL and locked (flock) for as long as this object lives.
+/// commit() syncs it and renames it over the target; the destructor removes it if commit() was
+/// never reached (an exception on the way). An existing target that is not a regular file (a
+/// folder, FIFO, device) is refused; a symbolic link to a file is followed, so the link stays
+/// and the file it names is replaced. Temporaries that killed runs left behind are removed when
+/// they are provably stale: unlocked and untouched for an hour (never by PID, which means
+/// nothing in another PID namespace or on another host). Every error names the target.
+///
+/// A target that is itself the temporary of an OutputGroup (its add()) is written in place:
+/// no second temporary, and errors name the group's target, not the hidden name.
 class AtomicFile
 {
 public:
@@ -23,17 +31,31 @@ public:
     AtomicFile& operator=(const AtomicFile&) = delete;
 
     const std::string& tempPath() const { return mTemp; }
+    /// The path renamed over at commit (a followed link's file).
     const std::string& target() const { return mTarget; }
+    /// The name for messages: the path the user gave.
+    const std::string& name() const { return mName; }
+    /// The temporary, open for writing (O_WRONLY), owned here.
+    int fd() const { return mFd; }
+    /// fsync, then rename over the target. OutputError naming the target on failure (the
+    /// temporary is removed and an older target kept).
     void commit();
 
 private:
-    std::string mTarget, mTemp;
-    bool mCommitted = false;
+    std::string mName, mTarget, mTemp;
+    int mFd = -1;
+    bool mCommitted = false, mInGroup = false;
 };
 
+/// Removes the temporary of every live AtomicFile of this process. For a process that is about
+/// to end without unwinding (_exit after a signal whose run did not stop in time): nothing
+/// partial is left behind. Thread-safe; not for signal handlers.
+void removeLiveTemporaries();
+
 /// OutputError unless an AtomicFile for target could be made: a path that names a file, in a
-/// folder that exists and this process may write into. For front ends that check every output
-/// before the work, so that a typo in a folder name costs no minutes of computing first.
+/// folder that exists and this process may write into, and that is not an existing folder,
+/// FIFO, socket or device. For front ends that check every output before the work, so that a
+/// typo in a folder name costs no minutes of computing first.
 void requireWritableFolder(const std::string& target);
 
 /// Write bytes to path atomically; OutputError on failure.
@@ -46,9 +68,11 @@ class OutputGroup
 {
 public:
     OutputGroup() = default;
+    ~OutputGroup();
     OutputGroup(const OutputGroup&) = delete;
     OutputGroup& operator=(const OutputGroup&) = delete;
-    /// The temporary path to write target's content to (same folder, same extension).
+    /// The temporary path to write target's content to (same folder, same extension). Writers
+    /// given it write into it in place and name target in their errors.
     std::string add(const std::string& target);
     void commit();
 

@@ -1,0 +1,175 @@
+// ActiveTiles.cc - level sets stored with active tiles, meshed as what they are (issue 63).
+//
+// Other tools prune a level set's uniform parts into tiles and may leave them active. Those
+// used to be voxelized whole: a tiled 512^3 box became 134M voxels, and its cells across the
+// box's faces still met inactive background corners, so our mesher gave 0 triangles. Here a
+// tile's inside has no surface (its value is one number); only its faces can, where the value
+// across the face has the other sign, or where an active voxel of the band meets it. Those face
+// voxels and the ones across from them are seeds; the seeds grown by one voxel (26 neighbours:
+// every corner of a cell around a crossing edge) become active voxels of a copy of the tree,
+// with the values the grid has there; every tile is then made inactive. The mesh is the surface
+// of the voxelized grid, at a cost in the tiles' faces, not their volume.
+#include "mesh/MarchingCubes.h"
+
+#include <fluidsurf/Error.h>
+
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tree/LeafManager.h>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <atomic>
+#include <climits>
+#include <memory>
+#include <vector>
+
+namespace fluidsurf {
+namespace mesh {
+
+namespace {
+
+using openvdb::Coord;
+using openvdb::CoordBBox;
+using openvdb::FloatTree;
+using openvdb::MaskTree;
+using FloatLeaf = FloatTree::LeafNodeType;
+
+struct Tile
+{
+    CoordBBox box;
+    float value;
+};
+
+/// Every voxel of a face block seeded: (p, q) pairs across a tile's face where the surface can
+/// pass. Bytes a seeded 8 x 8 face block may cost at the end: a float leaf and a mask leaf on
+/// each side, and as much again for the one-voxel growth around them.
+constexpr double kBytesPerBlock =
+    2 * 2 * double(sizeof(FloatLeaf) + sizeof(MaskTree::LeafNodeType));
+
+struct Seeder
+{
+    const FloatTree& tree;
+    const std::vector<Tile>& tiles;
+    Context& ctx;
+    std::atomic<size_t>& seededBlocks;
+    const std::string& what;
+    MaskTree seeds;
+
+    Seeder(const FloatTree& t, const std::vector<Tile>& ts, Context& c, std::atomic<size_t>& n,
+           const std::string& w)
+        : tree(t), tiles(ts), ctx(c), seededBlocks(n), what(w), seeds(false)
+    {
+    }
+    Seeder(Seeder& o, tbb::split)
+        : tree(o.tree), tiles(o.tiles), ctx(o.ctx), seededBlocks(o.seededBlocks), what(o.what),
+          seeds(false)
+    {
+    }
+    void join(Seeder& o) { seeds.topologyUnion(o.seeds); }
+
+    void operator()(const tbb::blocked_range<size_t>& r)
+    {
+        ctx.checkpoint();
+        openvdb::tree::ValueAccessor<const FloatTree> acc(tree);
+        openvdb::tree::ValueAccessor<MaskTree> out(seeds);
+        size_t blocks = 0;
+        for (size_t t = r.begin(); t != r.end(); ++t) {
+            const Tile& tile = tiles[t];
+            const bool inside = tile.value < 0;
+            for (int a = 0; a < 3; ++a) {
+                const int b = (a + 1) % 3, c = (a + 2) % 3;
+                for (int side = -1; side <= 1; side += 2) {
+                    const int pa = side < 0 ? tile.box.min()[a] : tile.box.max()[a];
+                    if ((side < 0 && pa == INT_MIN) || (side > 0 && pa == INT_MAX)) continue;
+                    for (int jb = tile.box.min()[b]; jb <= tile.box.max()[b]; jb += 8)
+                        for (int jc = tile.box.min()[c]; jc <= tile.box.max()[c]; jc += 8) {
+                            Coord q0;
+                            q0[a] = pa + side, q0[b] = jb, q0[c] = jc;
+                            const FloatLeaf* leaf = acc.probeConstLeaf(q0);
+                            // no leaf across: one tile or the background covers the block
+                            if (!leaf && (acc.getValue(q0) < 0) == inside) continue;
+                            bool any = false;
+                            for (int u = 0; u < 8; ++u)
+                                for (int v = 0; v < 8; ++v) {
+                                    Coord q = q0;
+                                    q[b] += u, q[c] += v;
+                                    if (leaf && (leaf->getValue(q) < 0) == inside &&
+                                        !leaf->isValueOn(q))
+                                        continue;
+                                    Coord p = q;
+                                    p[a] = pa;
+                                    out.setValueOn(p);
+                                    out.setValueOn(q);
+                                    any = true;
+                                }
+                            blocks += any;
+                        }
+                }
+            }
+        }
+        const size_t total = seededBlocks += blocks;
+        ctx.requireMemory(double(total) * kBytesPerBlock, what);
+    }
+};
+
+} // namespace
+
+const FloatTree& leafOnlyTree(const openvdb::FloatGrid& grid, FloatTree::Ptr& keep, Context& ctx)
+{
+    const FloatTree& tree = grid.tree();
+    if (!tree.hasActiveTiles()) return tree;
+    std::vector<Tile> tiles;
+    {
+        FloatTree::ValueOnCIter it = tree.cbeginValueOn();
+        it.setMaxDepth(FloatTree::ValueOnCIter::LEAF_DEPTH - 1);
+        for (; it; ++it)
+            tiles.push_back({it.getBoundingBox(), *it});
+    }
+    const std::string what = "meshing the " + std::to_string(tiles.size()) +
+                             " active tiles of grid '" + grid.getName() + "'";
+    std::atomic<size_t> seededBlocks{0};
+    Seeder seeder(tree, tiles, ctx, seededBlocks, what);
+    tbb::parallel_reduce(tbb::blocked_range<size_t>(0, tiles.size(), 64), seeder);
+    MaskTree& seeds = seeder.seeds;
+    openvdb::tools::dilateActiveValues(seeds, 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
+    ctx.requireMemory(
+        double(seeds.leafCount()) * double(sizeof(FloatLeaf)) + double(tree.memUsage()), what);
+
+    keep = std::make_shared<FloatTree>(tree);
+    // Seed leaves where the copy has a leaf: their voxels made active in place (each its own
+    // leaf, so in parallel); elsewhere a new leaf with the grid's values there (a tile's, or the
+    // background), its seeds active, added one by one below.
+    openvdb::tree::LeafManager<MaskTree> seedLeaves(seeds);
+    std::vector<std::unique_ptr<FloatLeaf>> fresh(seedLeaves.leafCount());
+    tbb::parallel_for(seedLeaves.leafRange(), [&](const auto& range) {
+        ctx.checkpoint();
+        openvdb::tree::ValueAccessor<const FloatTree> original(tree);
+        for (auto s = range.begin(); s; ++s) {
+            const Coord origin = s->origin();
+            if (FloatLeaf* have = keep->probeLeaf(origin)) {
+                for (auto on = s->cbeginValueOn(); on; ++on)
+                    have->setValueOn(on.pos());
+                continue;
+            }
+            auto leaf = std::make_unique<FloatLeaf>(origin, 0.0f, false);
+            for (openvdb::Index i = 0; i < FloatLeaf::SIZE; ++i)
+                leaf->setValueOnly(i, original.getValue(leaf->offsetToGlobalCoord(i)));
+            for (auto on = s->cbeginValueOn(); on; ++on)
+                leaf->setValueOn(on.pos());
+            fresh[s.pos()] = std::move(leaf);
+        }
+    });
+    for (std::unique_ptr<FloatLeaf>& leaf : fresh)
+        if (leaf) keep->addLeaf(leaf.release()); // (a tile there is split around it)
+    FloatTree::ValueOnIter tile = keep->beginValueOn();
+    tile.setMaxDepth(FloatTree::ValueOnIter::LEAF_DEPTH - 1);
+    for (; tile; ++tile)
+        tile.setValueOff();
+    return *keep;
+}
+
+} // namespace mesh
+} // namespace fluidsurf
