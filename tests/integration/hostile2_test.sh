@@ -104,6 +104,42 @@ PY
 check "a .bgeo.gz promising 1e9 points: refused, < 300 MB" peak_ok 300 "promise.bgeo.gz" "$BIN" info "$T/promise.bgeo.gz"
 check "no output after the memory refusals" bash -c "! ls '$T' | grep -q '^v\.'"
 
+# --- level sets of tiles, and grids with no surface (3, 7) ------------------------------------
+/usr/bin/python3 - "$T" <<'PY'
+import sys
+import pyopenvdb as vdb
+t = sys.argv[1]
+def level_set(background):
+    g = vdb.FloatGrid(background)
+    g.gridClass, g.name = vdb.GridClass.LEVEL_SET, "surface"
+    return g
+box = level_set(3.0)  # a 512^3 box of active tiles: 0 triangles before, 262k leaves voxelized
+box.fill((0, 0, 0), (511, 511, 511), -3.0, True)
+vdb.write(t + "/box.vdb", grids=[box])
+board = level_set(3.0)  # 40^3 tiles of alternate signs: every face a surface
+for i in range(40):
+    for j in range(40):
+        for k in range(40):
+            board.fill((8 * i, 8 * j, 8 * k), (8 * i + 7, 8 * j + 7, 8 * k + 7), -1.0 if (i + j + k) % 2 else 1.0, True)
+vdb.write(t + "/board.vdb", grids=[board])
+fog = vdb.FloatGrid(0.0)
+fog.gridClass, fog.name = vdb.GridClass.FOG_VOLUME, "density"
+fog.fill((0, 0, 0), (20, 20, 20), 1.0, True)
+vdb.write(t + "/fog.vdb", grids=[fog])
+vdb.write(t + "/empty.vdb", grids=[level_set(3.0)])
+negative = level_set(-3.0)
+negative.fill((0, 0, 0), (7, 7, 7), -1.0, True)
+vdb.write(t + "/negative.vdb", grids=[negative])
+PY
+for mesher in mc openvdb; do
+    check "a tiled 512^3 box meshes to one closed box ($mesher)" bash -c "'$BIN' mesh '$T/box.vdb' -o '$T/box_$mesher.ply' --mesher $mesher -q && '$BIN' info '$T/box_$mesher.ply' | grep -q 'watertight'"
+    check "tiles of alternate signs past --max-memory: refused with the estimate ($mesher), < 300 MB" peak_ok 300 "active tiles of grid 'surface' needs about" "$BIN" mesh "$T/board.vdb" -o "$T/board.obj" --mesher $mesher --max-memory 16M
+done
+for g in fog empty negative; do
+    err=$("$BIN" mesh "$T/$g.vdb" -o "$T/$g.obj" -q 2>&1 >/dev/null)
+    check "mesh of a $g grid: a warning says why there is no surface ($err)" grep -q "warning: .*$g.vdb: no surface in grid" <<<"$err"
+done
+
 # --- signals reach every command within a second (5) -------------------------------------------
 # (6M particles: info takes about 1 s, convert to .bgeo.gz 2 s on 2 cores; neither checks for a
 # stop in its loops, so the watchdog ends them)

@@ -217,6 +217,20 @@ void addPostOptions(CLI::App* cmd, PipelineOptions& o)
         raw->excludes(step);
 }
 
+/// Why a grid meshed to nothing, for the warning: a fog volume, an empty grid and a negative
+/// background gave 0 triangles and no word (issue 63).
+std::string whyNoSurface(const openvdb::FloatGrid& grid)
+{
+    if (grid.getGridClass() == openvdb::GRID_FOG_VOLUME)
+        return "it is a fog volume (densities, 0 outside), not a level set; mesh a level set "
+               "of it";
+    if (grid.activeVoxelCount() == 0) return "it has no active voxels";
+    if (grid.background() < 0)
+        return "its background is negative, so that the outside reads as inside (a level "
+               "set's is +half-width)";
+    return "no value changes sign between active voxels (all inside or all outside)";
+}
+
 } // namespace
 
 Runner addMeshCommand(CLI::App& app)
@@ -250,7 +264,7 @@ Runner addMeshCommand(CLI::App& app)
             [&](const std::string& input, Context&, MeshInput& in) {
                 in.levelSet = io::readLevelSetFile(input, o->grid);
             },
-            [&](const std::string&, MeshInput& in, Context& ctx, Counts& counts) {
+            [&](const std::string& input, MeshInput& in, Context& ctx, Counts& counts) {
                 if (!in.levelSet.adaptive.empty()) {
                     AdaptiveMeshStats as;
                     TriangleMesh mesh = meshAdaptiveGrid(in.levelSet.adaptive, ctx, &as);
@@ -260,6 +274,10 @@ Runner addMeshCommand(CLI::App& app)
                 MeshStats ms;
                 TriangleMesh mesh = meshLevelSet(*in.levelSet.grid, mesher, ctx, &ms);
                 counts.push_back({"surface_cells", double(ms.surfaceCells)});
+                if (mesh.empty())
+                    in.warning = "fluidsurf: warning: " + input + ": no surface in grid '" +
+                                 in.levelSet.grid->getName() +
+                                 "': " + whyNoSurface(*in.levelSet.grid) + "\n";
                 return mesh;
             });
     };

@@ -207,7 +207,7 @@ size_t Context::memoryBudget() const
 
 void Context::requireMemory(double bytes, const std::string& what) const
 {
-    fluidsurf::requireMemory(bytes, what, memoryBudget());
+    fluidsurf::requireMemory(bytes, what, mMemoryBudget); // (0: the process's, said so)
 }
 
 void Context::checkpoint()
