@@ -22,7 +22,9 @@
 
 #include <atomic>
 #include <climits>
+#include <cmath>
 #include <memory>
+#include <unordered_set>
 #include <vector>
 
 namespace fluidsurf {
@@ -118,6 +120,37 @@ struct Seeder
     }
 };
 
+/// Bytes of the internal nodes the seeds of these tiles will need, before one is made: every
+/// node (of 128^3 and of 4096^3 voxels) that a tile's faces or the voxels across them reach,
+/// once in the seeds' mask and once in the float copy. Far-apart tiles need nodes of their own on
+/// each side (4,096 tiles 4,096 voxels apart took 7.7 GB and 29 s): the faces' blocks alone did
+/// not see that.
+double nodeBytes(const std::vector<Tile>& tiles)
+{
+    using Upper = FloatTree::RootNodeType::ChildNodeType; // 4096^3
+    using Lower = Upper::ChildNodeType;                   // 128^3
+    using MaskUpper = MaskTree::RootNodeType::ChildNodeType;
+    using MaskLower = MaskUpper::ChildNodeType;
+    std::unordered_set<Coord> upper, lower;
+    auto cover = [](std::unordered_set<Coord>& set, const CoordBBox& box, int dim) {
+        const auto down = [dim](int v) { return int(std::floor(double(v) / dim)) * dim; };
+        for (int x = down(box.min().x()); x <= box.max().x(); x += dim)
+            for (int y = down(box.min().y()); y <= box.max().y(); y += dim)
+                for (int z = down(box.min().z()); z <= box.max().z(); z += dim)
+                    set.insert(Coord(x, y, z));
+    };
+    for (const Tile& t : tiles) {
+        CoordBBox grown = t.box; // the faces and one voxel past them
+        grown.expand(1);
+        cover(upper, grown, int(Upper::DIM));
+        if (t.box.dim().x() <= int(Lower::DIM)) { // (a larger tile's faces: counted as blocks)
+            cover(lower, grown, int(Lower::DIM));
+        }
+    }
+    return double(upper.size()) * double(sizeof(Upper) + sizeof(MaskUpper)) +
+           double(lower.size()) * double(sizeof(Lower) + sizeof(MaskLower));
+}
+
 } // namespace
 
 const FloatTree& leafOnlyTree(const openvdb::FloatGrid& grid, FloatTree::Ptr& keep, Context& ctx)
@@ -133,14 +166,25 @@ const FloatTree& leafOnlyTree(const openvdb::FloatGrid& grid, FloatTree::Ptr& ke
     }
     const std::string what = "meshing the " + std::to_string(tiles.size()) +
                              " active tiles of grid '" + grid.getName() + "'";
+    ctx.requireMemory(double(tree.memUsage()) + nodeBytes(tiles), what);
     std::atomic<size_t> seededBlocks{0};
     Seeder seeder(tree, tiles, ctx, seededBlocks, what);
     tbb::parallel_reduce(tbb::blocked_range<size_t>(0, tiles.size(), 64), seeder);
     MaskTree& seeds = seeder.seeds;
+    // before the growth: the copy, the seeds' internal nodes three times over (the mask grown,
+    // and the float tree's), and the blocks' leaves and mesh
+    ctx.requireMemory(double(tree.memUsage()) + 3 * double(seeds.memUsage()) +
+                          double(seededBlocks.load()) * kBytesPerBlock,
+                      what);
     openvdb::tools::dilateActiveValues(seeds, 1, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                        openvdb::tools::IGNORE_TILES);
-    // (now with the growth counted: the leaves, the copy of the tree, and the mesh's share)
-    ctx.requireMemory(double(seeds.leafCount()) * kLeafBytes + double(tree.memUsage()) +
+    // Now with the growth counted: the copy of the tree, the seeds' leaves as float leaves, the
+    // internal nodes they need (as many as the mask's, and as large: tiles far apart each need
+    // nodes of their own beside them, 300 KB a pair), the mask itself, and the mesh's share.
+    const double maskBytes = double(seeds.memUsage()),
+                 maskLeafBytes = double(seeds.leafCount()) * sizeof(MaskTree::LeafNodeType);
+    ctx.requireMemory(double(tree.memUsage()) + double(seeds.leafCount()) * kLeafBytes +
+                          2 * (maskBytes - maskLeafBytes) + maskBytes +
                           double(seededBlocks.load()) * (128 * 12 + 64 * 24),
                       what);
 
