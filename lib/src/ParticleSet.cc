@@ -164,7 +164,7 @@ size_t ParticleSet::dropNonFinite()
     std::vector<char> keep(size());
     size_t dropped = 0;
     for (size_t i = 0; i < size(); ++i) {
-        keep[i] = positions[i].isFinite();
+        keep[i] = positions[i].isWithinRange(); // (past kMaxCoordinate no distance is finite)
         dropped += !keep[i];
     }
     if (dropped == 0) return 0;

@@ -79,6 +79,31 @@ out=$("$BIN" rasterize "$T/k_{:04}.bgeo" -r 0.025 -o "$T/k_{:04}.vdb" --skip-exi
 check "--skip-existing redoes the empty and the cut output, skips the whole one ($out)" grep -q "2 done, 1 skipped" <<<"$out"
 check "--skip-existing: the redone outputs read back" bash -c "'$BIN' info '$T/k_0001.vdb' >/dev/null && '$BIN' info '$T/k_0003.vdb' >/dev/null"
 
+# --- NaN, Inf and absurd values: refused or dropped with a message, never written (7) ---------
+/usr/bin/python3 - "$T" <<'PY'
+import struct, sys
+t = sys.argv[1]
+lattice = [(0.05 * i, 0.05 * j, 0.05 * k) for i in range(12) for j in range(12) for k in range(12)]
+pack = lambda pts: b"".join(struct.pack("<3f", *p) for p in pts)
+open(t + "/far1.xyz", "wb").write(pack(lattice + [(1e20, 0, 0)]))
+open(t + "/huge.xyz", "wb").write(pack([(x * 1e22, y * 1e22, z * 1e22) for x, y, z in lattice]))
+tetra = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+for name, bad in (("nan", "nan"), ("inf", "inf"), ("far", "1e38")):
+    open("%s/%s.obj" % (t, name), "w").write(tetra.replace("v 1 0 0", "v 1 %s 0" % bad))
+rows = ["%g %g %g 0.025" % p for p in lattice] + ["0.3 0.3 0.3 1e30"]
+open(t + "/pscale.ply", "w").write("ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\n"
+    "property float y\nproperty float z\nproperty float pscale\nend_header\n%s\n" % (len(rows), "\n".join(rows)))
+PY
+expect_error "one pscale of 1e30 (it emptied the mesh)" "over 1000 times the median" "$BIN" reconstruct "$T/pscale.ply" -o "$T/n.obj"
+expect_error "a particle at 1e20: refused, naming it" "lie beyond +-1e15" "$BIN" reconstruct "$T/far1.xyz" -r 0.025 -o "$T/n.obj"
+check "a particle at 1e20: --drop-nonfinite drops it and the rest reconstructs" bash -c "'$BIN' reconstruct '$T/far1.xyz' -r 0.025 -o '$T/n.obj' --drop-nonfinite -q && [ -s '$T/n.obj' ]"
+expect_error "a lattice at scale 1e22 (r estimated)" "beyond +-1e15" "$BIN" reconstruct "$T/huge.xyz" -o "$T/h.obj"
+expect_error "--voxel 1e38" "voxel size" "$BIN" rasterize "$T/x.bgeo" -r 0.025 --voxel 1e38 -o "$T/h.vdb"
+for name in nan inf far; do
+    expect_error "post of a mesh with a $name vertex" "vertex 2 of 4" "$BIN" post "$T/$name.obj" -o "$T/p_$name.obj"
+done
+check "no output from the refused values" bash -c "! ls '$T' | grep -q '^\(h\.\|p_\)'"
+
 # --- memory: refused with the estimate before the budget is passed (4) -------------------------
 peak_ok() { # peak_ok LIMIT_MIB PATTERN CMD...: fails with PATTERN in its error, its peak under LIMIT
     /usr/bin/python3 - "$@" <<'PY'

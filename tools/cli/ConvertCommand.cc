@@ -32,7 +32,7 @@ Runner addConvertCommand(CLI::App& app)
         ->required();
     cmd->add_option("--frames", o->frames, "frame range A-B for a pattern");
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
-                  "drop particles with NaN/Inf coordinates instead of failing");
+                  "drop particles with NaN/Inf coordinates (or past 1e15) instead of failing");
     cmd->add_flag("--no-compress", o->noCompress, "write VDB points without Blosc compression");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no per-frame lines");
     addSequenceOptions(cmd, o->sequence);

@@ -166,7 +166,7 @@ Runner addInfoCommand(CLI::App& app)
         ->required();
     cmd->add_option("--frames", o->frames, "frame range A-B for a pattern");
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
-                  "drop particles with NaN/Inf coordinates instead of failing");
+                  "drop particles with NaN/Inf coordinates (or past 1e15) instead of failing");
     cmd->add_flag("--no-spacing", o->noSpacing, "skip the nearest-neighbour spacing estimate");
     cmd->footer(
         "Examples:\n"

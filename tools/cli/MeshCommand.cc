@@ -355,7 +355,7 @@ Runner addReconstructCommand(CLI::App& app)
     addFieldOptions(cmd, o->pipeline);
     addMeshOutputOptions(cmd, *o);
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
-                  "drop particles with NaN/Inf coordinates instead of failing");
+                  "drop particles with NaN/Inf coordinates (or past 1e15) instead of failing");
     cmd->add_option("--isolated", o->pipeline.isolated,
                     "isolated particles (no neighbour within h), which the field leaves out: "
                     "spheres (each a closed icosphere of its radius, faces within 1% of it) or "

@@ -42,7 +42,7 @@ Runner addRasterizeCommand(CLI::App& app)
     addAttributesOption(cmd, o->pipeline,
                         "written as grids over the level set's band beside it (v as a Vec3fGrid)");
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
-                  "drop particles with NaN/Inf coordinates instead of failing");
+                  "drop particles with NaN/Inf coordinates (or past 1e15) instead of failing");
     addSequenceOptions(cmd, o->sequence);
     addInFlightOption(cmd, o->inFlight);
     cmd->footer(

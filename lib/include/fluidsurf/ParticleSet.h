@@ -57,8 +57,8 @@ public:
     /// Throws ValueError when an attribute's length does not match the particle count.
     void validate() const;
 
-    /// Remove particles whose position is not finite (NaN/Inf), together with their attribute
-    /// values; returns how many were removed.
+    /// Remove particles whose position is not finite (NaN/Inf) or lies past kMaxCoordinate,
+    /// together with their attribute values; returns how many were removed.
     size_t dropNonFinite();
 };
 

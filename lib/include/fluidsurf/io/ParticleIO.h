@@ -32,7 +32,8 @@ bool canWriteParticles(ParticleFormat format);
 
 struct ReadOptions
 {
-    /// Drop particles with NaN/Inf coordinates (counted in ReadInfo) instead of failing.
+    /// Drop particles with NaN/Inf coordinates or past kMaxCoordinate (counted in ReadInfo)
+    /// instead of failing.
     bool dropNonFinite = false;
     /// Accept a frame with zero particles instead of failing.
     bool allowEmpty = false;
