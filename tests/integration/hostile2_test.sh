@@ -147,6 +147,13 @@ for i in range(40):
         for k in range(40):
             board.fill((8 * i, 8 * j, 8 * k), (8 * i + 7, 8 * j + 7, 8 * k + 7), -1.0 if (i + j + k) % 2 else 1.0, True)
 vdb.write(t + "/board.vdb", grids=[board])
+spread = level_set(3.0)  # 512 tiles 4096 voxels apart: 5 MB of file, 150 MB of OpenVDB nodes
+for i in range(8):
+    for j in range(8):
+        for k in range(8):
+            o = (4096 * i, 4096 * j, 4096 * k)
+            spread.fill(o, (o[0] + 7, o[1] + 7, o[2] + 7), -1.0, True)
+vdb.write(t + "/spread.vdb", grids=[spread])
 fog = vdb.FloatGrid(0.0)
 fog.gridClass, fog.name = vdb.GridClass.FOG_VOLUME, "density"
 fog.fill((0, 0, 0), (20, 20, 20), 1.0, True)
@@ -160,6 +167,7 @@ for mesher in mc openvdb; do
     check "a tiled 512^3 box meshes to one closed box ($mesher)" bash -c "'$BIN' mesh '$T/box.vdb' -o '$T/box_$mesher.ply' --mesher $mesher -q && '$BIN' info '$T/box_$mesher.ply' | grep -q 'watertight'"
     check "tiles of alternate signs past --max-memory: refused with the estimate ($mesher), < 300 MB" peak_ok 300 "active tiles of grid 'surface' needs about" "$BIN" mesh "$T/board.vdb" -o "$T/board.obj" --mesher $mesher --max-memory 16M
 done
+check "far-apart tiles whose nodes pass --max-memory: refused by the file's walk, < 100 MB" peak_ok 100 "a grid's tree needs about" "$BIN" mesh "$T/spread.vdb" -o "$T/spread.obj" --max-memory 64M
 for g in fog empty negative; do
     err=$("$BIN" mesh "$T/$g.vdb" -o "$T/$g.obj" -q 2>&1 >/dev/null)
     check "mesh of a $g grid: a warning says why there is no surface ($err)" grep -q "warning: .*$g.vdb: no surface in grid" <<<"$err"

@@ -22,6 +22,9 @@
 #include "io/VdbCheckParts.h"
 #include "io/VdbPointBuffers.h"
 
+#include <fluidsurf/MemoryBudget.h>
+
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <set>
@@ -128,11 +131,14 @@ public:
     }
 
     /// The topology (root, internal nodes, leaf masks); returns where the leaf buffers start.
+    /// ValueError past the memory budget for the tree OpenVDB would build: a few MB of file can
+    /// describe gigabytes of internal nodes (tiles far apart each need nodes of 300 KB).
     size_t topology()
     {
         const int32_t buffers = mIn.read<int32_t>(false, "tree buffer count");
         if (buffers != 1) mIn.fail("corrupt tree buffer count " + std::to_string(buffers));
         root();
+        requireMemory(mTreeBytes, mIn.source() + ": a grid's tree");
         return mIn.offset();
     }
 
@@ -196,6 +202,9 @@ private:
     void internal(int log2Dim)
     {
         const size_t entries = size_t(1) << (3 * log2Dim), maskBytes = entries / 8;
+        // in memory: a table entry each (a child pointer or a value, 8 bytes at least), 3 masks
+        mTreeBytes += double(entries) * double(std::max<size_t>(8, (mFullBytes + 7) / 8 * 8)) +
+                      3.0 * double(maskBytes);
         const uint8_t* childMask = mIn.take(maskBytes, "internal node child mask");
         const uint8_t* valueMask = mIn.take(maskBytes, "internal node value mask");
         for (size_t i = 0; i < maskBytes; ++i)
@@ -207,8 +216,10 @@ private:
                  bits &= bits - 1) {
                 if (log2Dim == 5)
                     internal(4);
-                else
+                else {
                     mLeafMasks.push_back(mIn.take(64, "leaf topology mask"));
+                    mTreeBytes += 512.0 * double(mFullBytes) + 128;
+                }
             }
     }
 
@@ -257,6 +268,7 @@ private:
     ByteReader& mIn;
     const uint32_t mCompression;
     const size_t mFullBytes, mArrayBytes;
+    double mTreeBytes = 0; ///< what OpenVDB's tree of the nodes walked so far will take
     const bool mHalf, mDecode;
     std::vector<const uint8_t*> mLeafMasks;
     std::vector<uint8_t> mScratch;
