@@ -95,9 +95,9 @@ open(t + "/pscale.ply", "w").write("ply\nformat ascii 1.0\nelement vertex %d\npr
     "property float y\nproperty float z\nproperty float pscale\nend_header\n%s\n" % (len(rows), "\n".join(rows)))
 PY
 expect_error "one pscale of 1e30 (it emptied the mesh)" "over 1000 times the median" "$BIN" reconstruct "$T/pscale.ply" -o "$T/n.obj"
-expect_error "a particle at 1e20: refused, naming it" "lie beyond +-1e15" "$BIN" reconstruct "$T/far1.xyz" -r 0.025 -o "$T/n.obj"
+expect_error "a particle at 1e20: refused, naming it" "particle 1728 lies at (1e+20, 0, 0), beyond +-1e+15" "$BIN" reconstruct "$T/far1.xyz" -r 0.025 -o "$T/n.obj"
 check "a particle at 1e20: --drop-nonfinite drops it and the rest reconstructs" bash -c "'$BIN' reconstruct '$T/far1.xyz' -r 0.025 -o '$T/n.obj' --drop-nonfinite -q && [ -s '$T/n.obj' ]"
-expect_error "a lattice at scale 1e22 (r estimated)" "beyond +-1e15" "$BIN" reconstruct "$T/huge.xyz" -o "$T/h.obj"
+expect_error "a lattice at scale 1e22 (r estimated)" "beyond +-1e+15" "$BIN" reconstruct "$T/huge.xyz" -o "$T/h.obj"
 expect_error "--voxel 1e38" "voxel size" "$BIN" rasterize "$T/x.bgeo" -r 0.025 --voxel 1e38 -o "$T/h.vdb"
 for name in nan inf far; do
     expect_error "post of a mesh with a $name vertex" "vertex 2 of 4" "$BIN" post "$T/$name.obj" -o "$T/p_$name.obj"

@@ -119,7 +119,7 @@ ParticleSet checked(ParticleSet set, ParticleFormat format, const std::string& s
         tbb::blocked_range<size_t>(0, set.size()), none,
         [&](const tbb::blocked_range<size_t>& r, Bad b) {
             for (size_t i = r.begin(); i != r.end(); ++i)
-                if (!set.positions[i].isWithinRange()) b.second = std::min(b.second, i), ++b.first;
+                if (!set.positions[i].isFinite()) b.second = std::min(b.second, i), ++b.first;
             return b;
         },
         [](const Bad& a, const Bad& b) {
@@ -128,14 +128,12 @@ ParticleSet checked(ParticleSet set, ParticleFormat format, const std::string& s
     const size_t bad = found.first;
     size_t dropped = 0;
     if (bad && !options.dropNonFinite)
-        throw InputError(
-            source + ": " + std::to_string(bad) +
-            (set.positions[found.second].isFinite()
-                 ? " particle(s) lie beyond +-1e15 world units, where float32 distances "
-                   "overflow (first: particle "
-                 : " particle(s) have NaN/Inf coordinates (first: particle ") +
-            std::to_string(found.second) + "); use --drop-nonfinite to drop them");
-    if (bad) dropped = set.dropNonFinite();
+        throw InputError(source + ": " + std::to_string(bad) +
+                         " particle(s) have NaN/Inf coordinates (first: particle " +
+                         std::to_string(found.second) + "); use --drop-nonfinite to drop them");
+    // (positions past kMaxCoordinate are read as they are, for convert and info; the pipeline
+    // refuses them, and asked to drop, the reader drops them with the non-finite ones)
+    if (options.dropNonFinite) dropped = set.dropNonFinite();
     if (set.empty() && !options.allowEmpty)
         throw InputError(source + ": contains no particles" +
                          std::string(dropped ? " after dropping non-finite ones" : ""));

@@ -319,7 +319,8 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
         char text[240];
         std::snprintf(text, sizeof(text),
                       "particle %zu lies at (%g, %g, %g), beyond +-%g world units, where float32 "
-                      "distances overflow; scale the positions down (e.g. to metres)",
+                      "distances overflow; scale the positions down (e.g. to metres), or drop "
+                      "such particles (--drop-nonfinite)",
                       bad, double(p.x), double(p.y), double(p.z), kMaxCoordinate);
         throw ValueError(text);
     }
