@@ -104,6 +104,14 @@ for name in nan inf far; do
 done
 check "no output from the refused values" bash -c "! ls '$T' | grep -q '^\(h\.\|p_\)'"
 
+# a block beside 150,000 particles at one point: the estimate took minutes (quadratic in the pile)
+/usr/bin/python3 -c "
+import struct
+block = b''.join(struct.pack('<3f', 0.05 * i, 0.05 * j, 0.05 * k) for i in range(20) for j in range(20) for k in range(20))
+open('$T/pile.xyz', 'wb').write(block + struct.pack('<3f', 3, 3, 3) * 150000)"
+expect_error "a pile at one point, r estimated: says so" "most particles lie on top of each other" timeout 60 "$BIN" reconstruct "$T/pile.xyz" -o "$T/pile.obj"
+check "a pile at one point, -r given: the block's mesh" bash -c "timeout 60 '$BIN' reconstruct '$T/pile.xyz' -r 0.025 -o '$T/pile.obj' -q && '$BIN' info '$T/pile.obj' | grep -q '1 component.*watertight'"
+
 # --- memory: refused with the estimate before the budget is passed (4) -------------------------
 peak_ok() { # peak_ok LIMIT_MIB PATTERN CMD...: fails with PATTERN in its error, its peak under LIMIT
     /usr/bin/python3 - "$@" <<'PY'

@@ -147,8 +147,12 @@ RadiusChoice chooseRadius(const ParticleSet& ps, double given, bool useAttribute
         return util::withThreads(ctx, [&] { return estimateSpacing(ps, ctx); });
     }();
     if (!(est.radius > 0))
-        throw ValueError("cannot estimate the particle radius (fewer than two particles, or all "
-                         "isolated); give it (-r)");
+        throw ValueError(
+            est.sampled > 0 && est.isolated < est.sampled && est.medianNearest == 0
+                ? "cannot estimate the particle radius: most particles lie on top of each other "
+                  "(the median distance to the nearest one is 0); give it (-r)"
+                : "cannot estimate the particle radius (fewer than two particles, or all "
+                  "isolated); give it (-r)");
     c.radius = est.radius, c.source = RadiusSource::Estimated;
     c.detail = est.fromDensity ? "half the spacing the particles' density implies"
                                : "half the median nearest-neighbour distance";
