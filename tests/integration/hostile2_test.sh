@@ -175,6 +175,9 @@ for mesher in mc openvdb; do
     check "a tiled 512^3 box meshes to one closed box ($mesher)" bash -c "'$BIN' mesh '$T/box.vdb' -o '$T/box_$mesher.ply' --mesher $mesher -q && '$BIN' info '$T/box_$mesher.ply' | grep -q 'watertight'"
     check "tiles of alternate signs past --max-memory: refused with the estimate ($mesher), < 300 MB" peak_ok 300 "active tiles of grid 'surface' needs about" "$BIN" mesh "$T/board.vdb" -o "$T/board.obj" --mesher $mesher --max-memory 16M
 done
+check "info --max-memory: far-apart tiles' tree refused before OpenVDB reads it, < 100 MB" peak_ok 100 "a grid's tree needs about" "$BIN" info "$T/spread.vdb" --max-memory 64M
+"$BIN" generate ball --count 200000 -r 0.01 -o "$T/b200k.bgeo.gz" >/dev/null
+check "convert --max-memory: 200k points (2.3 MiB) past 1M refused with the estimate" peak_ok 100 "reading the 200" "$BIN" convert "$T/b200k.bgeo.gz" "$T/b200k.ply" --max-memory 1M
 check "far-apart tiles whose nodes pass --max-memory: refused by the file's walk, < 100 MB" peak_ok 100 "a grid's tree needs about" "$BIN" mesh "$T/spread.vdb" -o "$T/spread.obj" --max-memory 64M
 for g in fog empty negative; do
     err=$("$BIN" mesh "$T/$g.vdb" -o "$T/$g.obj" -q 2>&1 >/dev/null)

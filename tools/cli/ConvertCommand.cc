@@ -1,9 +1,11 @@
 // ConvertCommand.cc - `fluidsurf convert IN OUT`: particle format conversion, sequences too.
 #include "Commands.h"
 #include "Frames.h"
+#include "Options.h"
 #include "Progress.h"
 #include "Sequence.h"
 
+#include <fluidsurf/MemoryBudget.h>
 #include <fluidsurf/io/ParticleIO.h>
 
 #include <cstdio>
@@ -15,7 +17,7 @@ namespace cli {
 namespace {
 struct ConvertOptions
 {
-    std::string input, output, frames;
+    std::string input, output, frames, maxMemory;
     bool dropNonFinite = false, noCompress = false, quiet = false;
     SequenceOptions sequence;
 };
@@ -35,12 +37,17 @@ Runner addConvertCommand(CLI::App& app)
                   "drop particles with NaN/Inf coordinates (or past 1e15) instead of failing");
     cmd->add_flag("--no-compress", o->noCompress, "write VDB points without Blosc compression");
     cmd->add_flag("-q,--quiet", o->quiet, "no progress bar and no per-frame lines");
+    cmd->add_option("--max-memory", o->maxMemory,
+                    "the most memory reading a frame may take, e.g. 8G (default: 80% of this "
+                    "machine's memory): a file whose header or tree promises more is refused "
+                    "with the estimate");
     addSequenceOptions(cmd, o->sequence);
     cmd->footer(
         "Examples:\n  fluidsurf convert frame.vtk frame.vdb\n"
         "  fluidsurf convert 'sim/f_####.bgeo' 'out/f_####.ply' --frames 1-100\n"
         "  fluidsurf convert 'sim/f_####.vtk' 'vdb/f_####.vdb' --shard slurm --skip-existing");
     return [o]() {
+        if (!o->maxMemory.empty()) setProcessMemoryBudget(parseMemorySize(o->maxMemory));
         const auto jobs = planFrames(o->input, o->output, o->frames);
         checkRunFiles(inputsOf(jobs), outputsOf(jobs));
         io::ReadOptions ro;

@@ -4,7 +4,9 @@
 // .ply with faces): vertices, triangles and the checkMesh report.
 #include "Commands.h"
 #include "Frames.h"
+#include "Options.h"
 
+#include <fluidsurf/MemoryBudget.h>
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/SpacingEstimate.h>
 #include <fluidsurf/io/LevelSetIO.h>
@@ -22,7 +24,7 @@ namespace {
 struct InfoOptions
 {
     std::vector<std::string> files;
-    std::string frames;
+    std::string frames, maxMemory;
     bool dropNonFinite = false;
     bool noSpacing = false;
 };
@@ -168,12 +170,17 @@ Runner addInfoCommand(CLI::App& app)
     cmd->add_flag("--drop-nonfinite", o->dropNonFinite,
                   "drop particles with NaN/Inf coordinates (or past 1e15) instead of failing");
     cmd->add_flag("--no-spacing", o->noSpacing, "skip the nearest-neighbour spacing estimate");
+    cmd->add_option("--max-memory", o->maxMemory,
+                    "the most memory reading a file may take, e.g. 8G (default: 80% of this "
+                    "machine's memory): a file whose header or tree promises more is refused "
+                    "with the estimate");
     cmd->footer(
         "Examples:\n"
         "  fluidsurf info frame.bgeo 'sim/fluid_{:04}.vtk' --frames 1-3\n"
         "  fluidsurf info frame.vdb         grids: class, voxel size, active voxels, metadata\n"
         "  fluidsurf info frame.obj         mesh: vertices, triangles, watertightness");
     return [o]() {
+        if (!o->maxMemory.empty()) setProcessMemoryBudget(parseMemorySize(o->maxMemory));
         for (const std::string& f : o->files)
             for (const FrameJob& job : planFrames(f, "", o->frames))
                 describeFile(job.input, *o);
