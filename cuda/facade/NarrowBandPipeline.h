@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -22,6 +23,11 @@
 
 namespace fluidsurf {
 namespace cuda {
+
+struct ClassCounts
+{
+    size_t interior = 0, surface = 0, splash = 0, isolated = 0;
+};
 
 struct PipelineSettings
 {
@@ -38,6 +44,9 @@ struct PipelineSettings
     // Band (narrowband/NarrowBand.h): half width in world units.
     double bandWidth = 0;
     FieldSettings field;
+    /// Called on the host with the classes' counts before the band is marked: the host's memory
+    /// check (an exception thrown here ends run() with it, before the band is built).
+    std::function<void(const ClassCounts&)> beforeBand;
 };
 
 struct LeafBlocks
@@ -47,11 +56,6 @@ struct LeafBlocks
     std::vector<float>
         values; ///< the active voxels only, leaf after leaf, in OpenVDB's voxel order
     size_t size() const { return origins.size() / 3; }
-};
-
-struct ClassCounts
-{
-    size_t interior = 0, surface = 0, splash = 0, isolated = 0;
 };
 
 class NarrowBandPipeline

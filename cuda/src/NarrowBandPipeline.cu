@@ -107,6 +107,7 @@ LeafBlocks NarrowBandPipeline::run(const PipelineSettings& s)
     m.counts.interior = counts[classify::Interior], m.counts.surface = counts[classify::Surface];
     m.counts.splash = counts[classify::Splash], m.counts.isolated = counts[classify::Isolated];
     events.mark("classify");
+    if (s.beforeBand) s.beforeBand(m.counts);
 
     BandSettings bs;
     bs.width = s.bandWidth;

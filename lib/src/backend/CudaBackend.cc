@@ -16,6 +16,7 @@
 #include "facade/FieldGather.h"
 #include "facade/MarchingCubes.h"
 #include "facade/NarrowBandPipeline.h"
+#include "narrowband/NarrowBand.h"
 
 #include <openvdb/tree/LeafManager.h>
 
@@ -229,6 +230,11 @@ public:
         s.keepIsolated = params.keepIsolated;
         s.bandWidth = width;
         s.field = fieldSettings(params, level);
+        s.beforeBand = [&](const cuda::ClassCounts& c) { // the CPU's seeds: surface and splash
+            narrowband::requireBandMemory(c.surface + c.splash +
+                                              (params.keepIsolated ? c.isolated : 0),
+                                          params, level, width, ctx);
+        };
         cuda::LeafBlocks blocks;
         {
             const auto t = ctx.scope("device field");

@@ -83,10 +83,9 @@ struct BandBuilder
 /// of the leaf's masks and of the field's block.
 constexpr double kBytesPerBandVoxel = 8;
 
-/// ValueError with the estimate before a band that cannot fit is built (issue 63: a voxel of
-/// 0.03 r on a 32k-particle frame took 23.7 GB and the machine with it). Each seed adds the
-/// voxels of its box, at most; as a rule its share of the surface, about a spacing (2r)
-/// squared, times the band's thickness.
+} // namespace
+
+// (issue 63: a voxel of 0.03 r on a 32k-particle frame took 23.7 GB, and the machine with it)
 void requireBandMemory(size_t seeds, const Params& params, const Level& level, double width,
                        Context& ctx)
 {
@@ -99,7 +98,6 @@ void requireBandMemory(size_t seeds, const Params& params, const Level& level, d
                   dx / params.radius);
     ctx.requireMemory(double(seeds) * perSeed * kBytesPerBandVoxel, what);
 }
-} // namespace
 
 openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
                                        const classify::Classification& classes,

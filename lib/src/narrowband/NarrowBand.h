@@ -32,6 +32,13 @@ openvdb::MaskTree::Ptr buildNarrowBand(const neighbors::CellIndex& particles,
                                        const Params& params, const Level& level, double width,
                                        Context& ctx);
 
+/// ValueError with the estimate, past ctx's memory budget, for a band of `seeds` surface
+/// particles (each adds at most its box of voxels, as a rule its share of the surface, a
+/// spacing squared, times the band's thickness). buildNarrowBand calls it; so does the GPU's
+/// band, from its classes' counts.
+void requireBandMemory(size_t seeds, const Params& params, const Level& level, double width,
+                       Context& ctx);
+
 /// Index box of every vertex within R of the particles' bounding box (the "bounding volume").
 openvdb::CoordBBox boundingVolume(const neighbors::CellIndex& particles, const Params& params,
                                   const Level& level);
