@@ -1,8 +1,8 @@
 // MeshReader.cc - reading triangle meshes back (`fluidsurf info`, tests): Wavefront OBJ (v, vn,
-// f with any of the a, a/b, a/b/c, a//c forms, negative indices, polygons fanned into triangles)
-// and PLY (ascii, binary little or big endian; a vertex element with x y z [nx ny nz], a face
-// element with a list of indices). Validated like the particle readers: a bad file is one
-// InputError naming the file, the problem and where.
+// f with any of the a, a/b, a/b/c, a//c forms, negative indices, polygons cut into triangles as
+// strips: io/Polygon.h) and PLY (ascii, binary little or big endian; a vertex element with x y z
+// [nx ny nz], a face element with a list of indices). Validated like the particle readers: a bad
+// file is one InputError naming the file, the problem and where.
 #include <fluidsurf/Error.h>
 #include <fluidsurf/io/MeshIO.h>
 
@@ -10,6 +10,7 @@
 #include "io/FileBuffer.h"
 #include "io/ObjInParallel.h"
 #include "io/PlyHeader.h"
+#include "io/Polygon.h"
 #include "io/TextParse.h"
 
 #include "util/Memory.h"
@@ -67,8 +68,10 @@ TriangleMesh readObj(const uint8_t* data, size_t size, const std::string& path)
                          " vertices read so far");
                 face.push_back(uint32_t(i - 1));
             }
-            for (size_t k = 1; k + 1 < face.size(); ++k)
-                m.triangles.push_back({face[0], face[k], face[k + 1]});
+            io_internal::triangulatePolygon(face.data(), face.size(),
+                                            [&](uint32_t a, uint32_t b, uint32_t c) {
+                                                m.triangles.push_back({a, b, c});
+                                            });
         }
         // Other statements (vt, o, g, s, usemtl, mtllib, l, p) carry nothing checkMesh needs.
     }
@@ -226,8 +229,10 @@ TriangleMesh readPly(const uint8_t* data, size_t size, const std::string& path,
                 }
                 if (int(k) == indices) {
                     if (face.size() < 3) in.fail("a PLY face with fewer than three vertices");
-                    for (size_t f = 1; f + 1 < face.size(); ++f)
-                        m.triangles.push_back({face[0], face[f], face[f + 1]});
+                    io_internal::triangulatePolygon(face.data(), face.size(),
+                                                    [&](uint32_t a, uint32_t b, uint32_t c) {
+                                                        m.triangles.push_back({a, b, c});
+                                                    });
                 }
             }
             if (vertex) {

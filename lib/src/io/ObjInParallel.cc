@@ -8,6 +8,7 @@
 #include "io/ObjInParallel.h"
 
 #include "io/Formats.h"
+#include "io/Polygon.h"
 #include "io/TextParse.h"
 
 #include "util/Memory.h"
@@ -147,8 +148,10 @@ bool readObjInParallel(const uint8_t* data, size_t size, TriangleMesh& out)
                     if (i < 1 || i > n) return false;
                     face.push_back(uint32_t(i - 1));
                 }
-                for (size_t c = 1; c + 1 < face.size(); ++c)
-                    out.triangles[at.triangles++] = {face[0], face[c], face[c + 1]};
+                triangulatePolygon(face.data(), face.size(),
+                                   [&](uint32_t a, uint32_t b, uint32_t c) {
+                                       out.triangles[at.triangles++] = {a, b, c};
+                                   });
             }
             return true;
         });

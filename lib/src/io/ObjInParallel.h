@@ -14,9 +14,9 @@ namespace io_internal {
 constexpr size_t kObjLineLimit = size_t(1) << 20;
 
 /// The mesh of the OBJ text [data, data + size) into `out` (empty), as the mesh reader reads it:
-/// v, vn and f with any of the a, a/b, a/b/c, a//c forms, negative indices, polygons fanned into
-/// triangles; normals kept when there is one per vertex. False, with `out` in any state, for
-/// a file the mesh reader would refuse, or with a line of kObjLineLimit bytes or more.
+/// v, vn and f with any of the a, a/b, a/b/c, a//c forms, negative indices, polygons cut into
+/// triangles (Polygon.h); normals kept when there is one per vertex. False, with `out` in any
+/// state, for a file the mesh reader would refuse, or with a line of kObjLineLimit bytes or more.
 bool readObjInParallel(const uint8_t* data, size_t size, TriangleMesh& out);
 
 } // namespace io_internal

@@ -32,8 +32,8 @@ public:
     /// 0.039 s of the writer's 0.095 s in fsync after the last byte.
     void write(const void* data, size_t size);
     void write(const std::string& s) { write(s.data(), s.size()); }
-    /// Close and rename over the target (fsync first); without it the destructor removes the
-    /// temporary.
+    /// fsync, rename over the target, then close (the lock on the temporary goes last);
+    /// without it the destructor removes the temporary.
     void commit();
 
     static constexpr uint64_t kWriteBack = uint64_t(8) << 20;

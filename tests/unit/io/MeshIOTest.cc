@@ -5,6 +5,8 @@
 
 #include <fluidsurf/io/MeshIO.h>
 
+#include <cmath>
+#include <set>
 #include <sstream>
 
 using namespace fluidsurf;
@@ -397,4 +399,63 @@ TEST(MeshIO, LargeObjReadAsOneThreadReadsIt)
                 << e.what();
         }
     }
+}
+
+TEST(MeshIO, PolygonsBecomeStripsWithTheirWindingAndArea)
+{
+    // A convex 1,000-gon (a prism's cap): as a fan its first corner had 999 neighbours, and
+    // OpenMesh's decimater spent 34 s on the prism. Read from OBJ (both readers) and PLY, every
+    // triangle keeps the polygon's winding, the areas add up to the polygon's, and no corner has
+    // more than four neighbours. A quad is still fanned from its first corner.
+    const uint32_t n = 1000;
+    std::string obj, ply = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n) +
+                           "\nproperty float x\nproperty float y\nproperty float z\n"
+                           "element face 1\nproperty list int int vertex_indices\nend_header\n";
+    std::string objFace = "f", plyFace = std::to_string(n);
+    for (uint32_t i = 0; i < n; ++i) {
+        const double a = 2 * M_PI * i / n;
+        const std::string v =
+            std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0";
+        obj += "v " + v + "\n";
+        ply += v + "\n";
+        objFace += " " + std::to_string(i + 1);
+        plyFace += " " + std::to_string(i);
+    }
+    obj += objFace + "\n";
+    ply += plyFace + "\n";
+    const auto bytes = [](const std::string& s) {
+        return reinterpret_cast<const uint8_t*>(s.data());
+    };
+    TriangleMesh parallel;
+    ASSERT_TRUE(io_internal::readObjInParallel(bytes(obj), obj.size(), parallel));
+    const TriangleMesh meshes[] = {
+        io::readMeshFromMemory(bytes(obj), obj.size(), io::MeshFormat::Obj, "cap.obj"),
+        io::readMeshFromMemory(bytes(ply), ply.size(), io::MeshFormat::Ply, "cap.ply"), parallel};
+    const double polygonArea = 0.5 * n * std::sin(2 * M_PI / n);
+    for (const TriangleMesh& m : meshes) {
+        ASSERT_EQ(m.triangles.size(), n - 2);
+        double area = 0;
+        size_t clockwise = 0;
+        std::vector<std::set<uint32_t>> neighbours(n);
+        for (const auto& [a, b, c] : m.triangles) {
+            const Vec3f u = m.points[b] - m.points[a], w = m.points[c] - m.points[a];
+            const double z = 0.5 * (double(u.x) * w.y - double(u.y) * w.x);
+            clockwise += z <= 0;
+            area += z;
+            neighbours[a].insert({b, c});
+            neighbours[b].insert({a, c});
+            neighbours[c].insert({a, b});
+        }
+        EXPECT_EQ(clockwise, 0u);
+        EXPECT_NEAR(area, polygonArea, 1e-4 * polygonArea);
+        size_t most = 0;
+        for (const auto& s : neighbours)
+            most = std::max(most, s.size());
+        EXPECT_LE(most, 4u);
+    }
+    const std::string quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";
+    const auto q = io::readMeshFromMemory(bytes(quad), quad.size(), io::MeshFormat::Obj, "q.obj");
+    ASSERT_EQ(q.triangles.size(), 2u);
+    EXPECT_EQ(q.triangles[0], (std::array<uint32_t, 3>{0, 1, 2}));
+    EXPECT_EQ(q.triangles[1], (std::array<uint32_t, 3>{0, 2, 3}));
 }
