@@ -88,6 +88,29 @@ struct SequenceBenchOptions
 
 int runSequenceBench(const SequenceBenchOptions& options);
 
+struct QualityBenchOptions
+{
+    std::string jitters = "0.2,0.3,0.4"; ///< of the slab, in lattice spacings
+    size_t count = 20000;                ///< slab particles
+    double radius = 0.025;               ///< slab r
+    int layers = 6;                      ///< slab thickness in particles
+    std::string scenes = "real,large";   ///< the volume rows
+    std::string splashsurf;   ///< splashsurf 0.14's program for same-run rows; empty: none
+    std::string dir = "/tmp"; ///< where splashsurf's input and output go (removed after)
+    std::string shared = "../shared/data";
+};
+
+int runQualityBench(const QualityBenchOptions& options);
+
+/// A whole process's wall time (spawn to exit) and peak RSS.
+struct ProcessRun
+{
+    double seconds = 0, peakMiB = 0;
+};
+
+/// Runs argv to its end; Error when it cannot start or does not exit 0.
+ProcessRun runProcess(const std::vector<std::string>& argv);
+
 /// A benchmark scene: a real frame (with its file, for whole-process rows) or a generated one.
 struct Case
 {

@@ -27,12 +27,18 @@ namespace bench {
 
 namespace {
 
-struct ProcessRun
+/// The fluidsurf program beside this one.
+std::string besideThisProgram(const std::string& name)
 {
-    double seconds = 0, peakMiB = 0;
-};
+    char path[4096];
+    const ssize_t n = readlink("/proc/self/exe", path, sizeof(path) - 1);
+    if (n <= 0) return name;
+    std::string self(path, size_t(n));
+    return self.substr(0, self.rfind('/') + 1) + name;
+}
 
-/// Runs argv to its end; Error when it cannot start or does not exit 0.
+} // namespace
+
 ProcessRun runProcess(const std::vector<std::string>& argv)
 {
     std::vector<char*> args;
@@ -57,18 +63,6 @@ ProcessRun runProcess(const std::vector<std::string>& argv)
     run.peakMiB = double(usage.ru_maxrss) / 1024.0;
     return run;
 }
-
-/// The fluidsurf program beside this one.
-std::string besideThisProgram(const std::string& name)
-{
-    char path[4096];
-    const ssize_t n = readlink("/proc/self/exe", path, sizeof(path) - 1);
-    if (n <= 0) return name;
-    std::string self(path, size_t(n));
-    return self.substr(0, self.rfind('/') + 1) + name;
-}
-
-} // namespace
 
 int runSequenceBench(const SequenceBenchOptions& o)
 {

@@ -114,6 +114,23 @@ int main(int argc, char** argv)
     sequenceCmd->add_option("--repeat", sequence.repeat, "rounds (median)")->capture_default_str();
     sequenceCmd->add_option("--dir", sequence.dir, "folder for the frames and meshes")
         ->capture_default_str();
+    fluidsurf::bench::QualityBenchOptions quality;
+    CLI::App* qualityCmd = app.add_subcommand(
+        "quality", "flatness of a jittered slab's top face and enclosed volume of real frames: "
+                   "ours raw and default, splashsurf 0.14 in the same run (--splashsurf)");
+    qualityCmd->add_option("--jitters", quality.jitters, "slab jitters J (comma-separated)")
+        ->capture_default_str();
+    qualityCmd->add_option("--count", quality.count, "slab particles")->capture_default_str();
+    qualityCmd->add_option("-r,--radius", quality.radius, "slab r")->capture_default_str();
+    qualityCmd->add_option("--layers", quality.layers, "slab thickness")->capture_default_str();
+    qualityCmd->add_option("--scenes", quality.scenes, "frames of the volume rows")
+        ->capture_default_str();
+    qualityCmd->add_option("--splashsurf", quality.splashsurf,
+                           "splashsurf's program, e.g. "
+                           "/tmp/peers-new/splashsurf-0.14.0/target/release/splashsurf");
+    qualityCmd->add_option("--dir", quality.dir, "folder for splashsurf's files")
+        ->capture_default_str();
+    qualityCmd->add_option("--shared", quality.shared, "../shared/data")->capture_default_str();
     bool coldAllocator = false;
     app.add_flag(
         "--cold-allocator", coldAllocator,
@@ -133,6 +150,7 @@ int main(int argc, char** argv)
         if (app.got_subcommand("post")) return fluidsurf::bench::runPostBench(post);
         if (app.got_subcommand("adaptive")) return fluidsurf::bench::runAdaptiveBench(adaptive);
         if (app.got_subcommand("sequence")) return fluidsurf::bench::runSequenceBench(sequence);
+        if (app.got_subcommand("quality")) return fluidsurf::bench::runQualityBench(quality);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "fluidsurf_bench: error: %s\n", e.what());
         return 1;

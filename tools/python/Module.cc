@@ -167,7 +167,8 @@ void bindParticles(py::module_& m)
         py::arg("pool_depth") = SceneParams().poolDepthScale,
         py::arg("pool_aspect") = SceneParams().poolAspect,
         py::arg("droplets") = SceneParams().droplets,
-        "A deterministic scene (single, block, ball, slab, drop) as `fluidsurf generate` makes "
+        "A deterministic scene (single, block, ball, slab, drop, sheet, jet) as `fluidsurf "
+        "generate` makes "
         "it, as read_particles returns particles.");
 }
 

@@ -8,6 +8,11 @@
 //   slab    a flat lattice slab `layers` particles thick, jittered in-plane by `jitter` spacings
 //   drop    a ball falling into a pool (W x W x W/poolAspect, times poolDepthScale in depth,
 //           at least 3 layers) plus a few isolated droplets
+//   sheet   a quarter of a cylinder's wall (bent about the y axis, inner radius 8 spacings or
+//           more), `layers` particles thick (1 or 2 for the thin sheets of issue 64), jittered
+//           in all three directions by `jitter` spacings
+//   jet     a thin parabolic jet (a fountain's arc in the x-z plane), `layers` x `layers`
+//           particles across, slices one spacing apart along the arc, jittered by `jitter`
 #pragma once
 
 #include <fluidsurf/ParticleSet.h>
@@ -18,15 +23,15 @@
 
 namespace fluidsurf {
 
-enum class Scene { Single, Block, Ball, Slab, Drop };
+enum class Scene { Single, Block, Ball, Slab, Drop, Sheet, Jet };
 
 struct SceneParams
 {
-    double radius = 0.025;       ///< particle radius r, world units
-    size_t count = 10000;        ///< approximate particle count
-    uint64_t seed = 1;           ///< jitter / droplet placement seed
-    double jitter = 0.05;        ///< slab: in-plane jitter amplitude, in lattice spacings
-    int layers = 4;              ///< slab: thickness in particles
+    double radius = 0.025; ///< particle radius r, world units
+    size_t count = 10000;  ///< approximate particle count
+    uint64_t seed = 1;     ///< jitter / droplet placement seed
+    double jitter = 0.05;  ///< slab: in-plane jitter amplitude; sheet, jet: in 3D; in spacings
+    int layers = 4;        ///< slab, sheet: thickness in particles; jet: particles across
     double poolDepthScale = 1.0; ///< drop: pool depth multiplier (more interior)
     double poolAspect = 4.0;     ///< drop: pool width / depth (48: side walls ~4% of the surface)
     int droplets = 5;            ///< drop: isolated single particles

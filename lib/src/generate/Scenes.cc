@@ -59,7 +59,9 @@ Scene sceneFromName(const std::string& name)
     if (name == "ball") return Scene::Ball;
     if (name == "slab") return Scene::Slab;
     if (name == "drop") return Scene::Drop;
-    throw ValueError("unknown scene '" + name + "' (single, block, ball, slab, drop)");
+    if (name == "sheet") return Scene::Sheet;
+    if (name == "jet") return Scene::Jet;
+    throw ValueError("unknown scene '" + name + "' (single, block, ball, slab, drop, sheet, jet)");
 }
 
 const char* sceneName(Scene s)
@@ -75,13 +77,17 @@ const char* sceneName(Scene s)
         return "slab";
     case Scene::Drop:
         return "drop";
+    case Scene::Sheet:
+        return "sheet";
+    case Scene::Jet:
+        return "jet";
     }
     return "?";
 }
 
 std::vector<std::string> sceneNames()
 {
-    return {"single", "block", "ball", "slab", "drop"};
+    return {"single", "block", "ball", "slab", "drop", "sheet", "jet"};
 }
 
 ParticleSet generateScene(Scene scene, const SceneParams& p)
@@ -89,9 +95,10 @@ ParticleSet generateScene(Scene scene, const SceneParams& p)
     if (!(p.radius > 0) || !std::isfinite(p.radius))
         throw ValueError("scene radius must be positive");
     if (p.count < 1 || p.count > (size_t(1) << 31)) throw ValueError("scene count must be 1..2^31");
-    if (p.layers < 1) throw ValueError("slab layers must be >= 1");
-    if (!(p.jitter >= 0 && p.jitter < 0.5))
-        throw ValueError("slab jitter must be in [0, 0.5) spacings");
+    if (p.layers < 1) throw ValueError("layers must be >= 1");
+    if (!(p.jitter >= 0 && p.jitter < 0.5)) throw ValueError("jitter must be in [0, 0.5) spacings");
+    if ((scene == Scene::Sheet || scene == Scene::Jet) && p.layers > 64)
+        throw ValueError("sheet and jet layers must be 1..64");
     if (!(p.poolDepthScale > 0)) throw ValueError("pool depth scale must be positive");
     if (!(p.poolAspect >= 1 && p.poolAspect <= 1000))
         throw ValueError("pool aspect must be in [1, 1000]");
@@ -122,6 +129,49 @@ ParticleSet generateScene(Scene scene, const SceneParams& p)
                     const double jy = (rng.uniform() * 2 - 1) * p.jitter * b.spacing;
                     b.add(i * b.spacing + jx, j * b.spacing + jy, k * b.spacing);
                 }
+        break;
+    }
+    case Scene::Sheet: {
+        // A quarter turn of a cylinder's wall about the y axis: `arc` particles around (2r apart
+        // on the inner layer), `width` along y (twice as many around as along), layer k at the
+        // inner radius plus k spacings. Jitter in 3D, so the sheet is not a lattice's plane.
+        const int width = std::max(2, int(std::lround(std::sqrt(n / p.layers / 2))));
+        const int arc = 2 * width;
+        const double inner = std::max(8.0, arc / (M_PI / 2)) * b.spacing;
+        auto jitter = [&] { return (rng.uniform() * 2 - 1) * p.jitter * b.spacing; };
+        for (int k = 0; k < p.layers; ++k)
+            for (int j = 0; j < width; ++j)
+                for (int i = 0; i < arc; ++i) {
+                    const double angle = i * b.spacing / inner, rho = inner + k * b.spacing;
+                    const double jx = jitter(), jy = jitter(), jz = jitter();
+                    b.add(rho * std::cos(angle) + jx, j * b.spacing + jy,
+                          rho * std::sin(angle) + jz);
+                }
+        break;
+    }
+    case Scene::Jet: {
+        // A fountain's arc z = h (1 - (x / L)^2) for x in [-L, L], h = L / 2, with slices one
+        // spacing apart along it, each `layers` x `layers` particles across (in y, and in the
+        // arc's normal within x-z).
+        const int across = p.layers;
+        const double slices = std::max(8.0, n / double(across * across));
+        const double length = slices * b.spacing; // about the arc's length
+        const double L = length / 2.3, h = L / 2; // an arc of this shape is about 2.3 L long
+        auto jitter = [&] { return (rng.uniform() * 2 - 1) * p.jitter * b.spacing; };
+        double x = -L;
+        while (x <= L) {
+            const double slope = -2 * h * x / (L * L), z = h * (1 - x * x / (L * L));
+            const double norm = std::sqrt(1 + slope * slope);
+            const double nx = -slope / norm, nz = 1 / norm; // the arc's normal in x-z
+            for (int a = 0; a < across; ++a)
+                for (int c = 0; c < across; ++c) {
+                    const double u = (a - 0.5 * (across - 1)) * b.spacing;
+                    const double v = (c - 0.5 * (across - 1)) * b.spacing;
+                    const double jx = jitter(), jy = jitter(), jz = jitter();
+                    b.add(x + u * nx + jx, v + jy, z + u * nz + jz);
+                }
+            x += b.spacing / norm; // one spacing along the arc
+        }
         break;
     }
     case Scene::Drop: {

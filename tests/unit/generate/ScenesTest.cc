@@ -94,3 +94,59 @@ TEST(Scenes, InvalidParametersAreErrors)
     EXPECT_THROW(generateScene(Scene::Ball, p), ValueError);
     EXPECT_THROW(sceneFromName("teapot"), ValueError);
 }
+
+TEST(Scenes, SheetIsAJitteredQuarterCylinderWall)
+{
+    SceneParams p;
+    p.radius = 0.5, p.count = 4000, p.jitter = 0.2;
+    for (int layers : {1, 2}) {
+        p.layers = layers;
+        const ParticleSet s = generateScene(Scene::Sheet, p);
+        const int width = int(std::lround(std::sqrt(4000.0 / layers / 2)));
+        ASSERT_EQ(s.size(), size_t(layers * width * 2 * width));
+        // inner radius: the arc of 2 * width spacings is a quarter turn (at least 8 spacings)
+        const double spacing = 2 * p.radius,
+                     inner = std::max(8.0, 2 * width / (M_PI / 2)) * spacing;
+        const double reach = std::sqrt(3.0) * p.jitter * spacing; // the jitter's longest offset
+        for (size_t i = 0; i < s.size(); ++i) {
+            const Vec3f q = s.positions[i];
+            const double rho = std::hypot(double(q.x), double(q.z));
+            const int layer = int(i / size_t(width * 2 * width));
+            ASSERT_NEAR(rho, inner + layer * spacing, reach) << i;
+            ASSERT_GE(q.y, -reach);
+            ASSERT_LE(q.y, (width - 1) * spacing + reach);
+            ASSERT_GE(std::atan2(double(q.z), double(q.x)), -reach / inner);
+        }
+    }
+    p.layers = 65;
+    EXPECT_THROW(generateScene(Scene::Sheet, p), ValueError);
+}
+
+TEST(Scenes, JetIsAThinArc)
+{
+    SceneParams p;
+    p.radius = 0.5, p.count = 2000, p.jitter = 0.1, p.layers = 2;
+    const ParticleSet s = generateScene(Scene::Jet, p);
+    // slices of 4, one spacing apart along a parabola z = h (1 - (x / L)^2), h = L / 2
+    ASSERT_EQ(s.size() % 4, 0u);
+    // h from the particles at the top (x near 0: their offsets across cancel in the mean)
+    double top = 0;
+    size_t atTop = 0;
+    for (const Vec3f& q : s.positions)
+        if (std::fabs(q.x) < p.radius) top += q.z, ++atTop;
+    ASSERT_GT(atTop, 0u);
+    const double h = top / double(atTop), L = 2 * h;
+    size_t far = 0;
+    for (const Vec3f& q : s.positions) {
+        // the distance from the arc, sampled finely
+        double best = 1e9;
+        for (int k = 0; k <= 20000; ++k) {
+            const double x = -L + 2 * L * k / 20000.0, z = h * (1 - x * x / (L * L));
+            best = std::min(best, std::hypot(double(q.x) - x, double(q.z) - z));
+        }
+        // the slice's corners lie half a spacing off in both directions across it (and jitter)
+        far += std::hypot(best, double(q.y)) > std::sqrt(0.5) * 2 * p.radius + 0.2;
+    }
+    EXPECT_EQ(far, 0u);
+    EXPECT_NEAR(s.size() / 4.0, 2000 / 4.0, 0.1 * 2000 / 4.0) << "slices one spacing apart";
+}
