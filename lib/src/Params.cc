@@ -19,6 +19,7 @@ Params Params::fromRadius(double r)
     p.influenceRadius = 4 * r;
     p.smoothingLength = 4 * r;
     p.bandWidth = 2 * r;
+    p.anisotropyRadius = 8 * r;
     return p;
 }
 
@@ -76,6 +77,20 @@ void Params::validate() const
         throw ValueError("color-gradient threshold must be a finite number >= 0");
     if (adaptive && method != FieldMethod::NarrowBand)
         throw ValueError("the adaptive grid runs with the narrow-band method only");
+    if (field == FieldKind::Ssp07Aniso) {
+        if (method != FieldMethod::NarrowBand || adaptive)
+            throw ValueError("the ssp07-aniso field runs with the narrow-band method on the "
+                             "uniform grid only");
+        if (!(anisotropyRatio >= 1 && anisotropyRatio <= 8))
+            throw ValueError("anisotropy ratio must be in [1, 8] (got " +
+                             std::to_string(anisotropyRatio) + ")");
+        requirePositive(anisotropyRadius, "anisotropy radius");
+        if (anisotropyNeighbours < 0 || anisotropyNeighbours > 10000)
+            throw ValueError("anisotropy neighbours must be in [0, 10000]");
+        if (!(centreSmoothing >= 0 && centreSmoothing <= 1))
+            throw ValueError("centre smoothing must be in [0, 1] (got " +
+                             std::to_string(centreSmoothing) + ")");
+    }
     if (!std::isfinite(curvatureThreshold) || curvatureThreshold < 0)
         throw ValueError("curvature threshold must be a finite number >= 0 (got " +
                          std::to_string(curvatureThreshold) + ")");
@@ -93,7 +108,8 @@ void Params::validate() const
     const std::pair<double, const char*> lengths[] = {{influenceRadius, "influence radius R"},
                                                       {smoothingLength, "smoothing length h"},
                                                       {bandWidth, "band width"},
-                                                      {halfWidth * voxelSize, "half width"}};
+                                                      {halfWidth * voxelSize, "half width"},
+                                                      {anisotropyRadius, "anisotropy radius"}};
     for (const auto& [length, name] : lengths)
         if (length > 1000 * voxelSize)
             throw ValueError(std::string(name) + " above 1000 voxels is not supported (got " +
@@ -104,7 +120,7 @@ void Params::validate() const
 
 const char* fieldName(FieldKind f)
 {
-    return f == FieldKind::Ssp07 ? "ssp07" : "zb05";
+    return f == FieldKind::Ssp07 ? "ssp07" : f == FieldKind::Zb05 ? "zb05" : "ssp07-aniso";
 }
 
 const char* methodName(FieldMethod m)
@@ -124,7 +140,8 @@ FieldKind fieldFromName(const std::string& name)
 {
     if (name == "ssp07") return FieldKind::Ssp07;
     if (name == "zb05") return FieldKind::Zb05;
-    throw ValueError("unknown field '" + name + "' (ssp07, zb05)");
+    if (name == "ssp07-aniso") return FieldKind::Ssp07Aniso;
+    throw ValueError("unknown field '" + name + "' (ssp07, zb05, ssp07-aniso)");
 }
 
 FieldMethod methodFromName(const std::string& name)

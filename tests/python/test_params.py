@@ -83,7 +83,7 @@ def test_radii_and_the_radius_choice(ball):
         ({"smooth": 2.5}, TypeError, "smooth must be an int (got float)"),
         ({"subdivide": 4}, ValueError, "subdivide must be in [0, 3] (got 4)"),
         ({"adaptive": 1}, TypeError, "adaptive must be True or False (got int)"),
-        ({"field": "zb06"}, ValueError, "unknown field 'zb06' (ssp07, zb05)"),
+        ({"field": "zb06"}, ValueError, "unknown field 'zb06' (ssp07, zb05, ssp07-aniso)"),
         ({"decimate": 1.0}, ValueError, "decimate must be a fraction in [0, 1) or 'off'"),
         ({"raw": True, "smooth": 3}, ValueError, "raw=True excludes"),
         ({"voxels": 1.0}, TypeError, "unknown parameter 'voxels' (known: voxel=1.0, "),

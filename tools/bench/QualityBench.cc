@@ -93,9 +93,19 @@ const std::vector<std::string> kSplashSmooth = {"-l",
                                                 "--mesh-smoothing-iters=25",
                                                 "--mesh-cleanup=on"};
 
-ReconstructParams rawParams(double r)
+/// Our default pipeline with the bench's field and smoothing.
+ReconstructParams defaultParams(const QualityBenchOptions& o, double r)
 {
     ReconstructParams p = ReconstructParams::fromRadius(r);
+    p.field.field = fieldFromName(o.field);
+    p.post.smooth = o.smooth;
+    return p;
+}
+
+/// The same without decimation, smoothing or subdivision.
+ReconstructParams rawParams(const QualityBenchOptions& o, double r)
+{
+    ReconstructParams p = defaultParams(o, r);
     p.post.decimate = 0, p.post.smooth = 0, p.post.subdivide = 0;
     return p;
 }
@@ -105,7 +115,9 @@ ReconstructParams rawParams(double r)
 int runQualityBench(const QualityBenchOptions& o)
 {
     const bool peer = !o.splashsurf.empty();
-    std::printf("fluidsurf_bench quality: voxel = r, R = 4r (our defaults)%s\n\n",
+    std::printf("fluidsurf_bench quality: field %s, %d rounds of smoothing; voxel = r, R = 4r (our "
+                "defaults)%s\n\n",
+                o.field.c_str(), o.smooth,
                 peer ? "; splashsurf in the same run: smoothed `-l 2.0 -c 1.0 -t 0.6 "
                        "--mesh-smoothing-weights=on --mesh-smoothing-iters=25 --mesh-cleanup=on`, "
                        "raw `-l 2.0 -c 1.0 -t 0.6`"
@@ -133,8 +145,8 @@ int runQualityBench(const QualityBenchOptions& o)
             std::fflush(stdout);
         };
         Context ctx;
-        row("ours raw", reconstruct(slab, rawParams(o.radius), ctx).mesh);
-        row("ours default", reconstruct(slab, ReconstructParams::fromRadius(o.radius), ctx).mesh);
+        row("ours raw", reconstruct(slab, rawParams(o, o.radius), ctx).mesh);
+        row("ours default", reconstruct(slab, defaultParams(o, o.radius), ctx).mesh);
         if (peer) row("splashsurf smoothed", splashsurf(o, slab, o.radius, kSplashSmooth));
     }
     std::printf("\n**Volume**: enclosed volume / N (2r)^3; components (our droplet spheres aside); "
@@ -144,9 +156,8 @@ int runQualityBench(const QualityBenchOptions& o)
     for (const Case& c : loadCases(o.scenes, o.shared)) {
         const double particleVolume = double(c.particles.size()) * std::pow(2 * c.radius, 3);
         Context ctx;
-        const ReconstructResult raw = reconstruct(c.particles, rawParams(c.radius), ctx);
-        const ReconstructResult def =
-            reconstruct(c.particles, ReconstructParams::fromRadius(c.radius), ctx);
+        const ReconstructResult raw = reconstruct(c.particles, rawParams(o, c.radius), ctx);
+        const ReconstructResult def = reconstruct(c.particles, defaultParams(o, c.radius), ctx);
         const MeshReport rr = checkMesh(raw.mesh), dr = checkMesh(def.mesh);
         char splash[32] = "";
         if (peer)

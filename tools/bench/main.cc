@@ -125,6 +125,10 @@ int main(int argc, char** argv)
     qualityCmd->add_option("--layers", quality.layers, "slab thickness")->capture_default_str();
     qualityCmd->add_option("--scenes", quality.scenes, "frames of the volume rows")
         ->capture_default_str();
+    qualityCmd->add_option("--field", quality.field, "our rows' field: ssp07, zb05, ssp07-aniso")
+        ->capture_default_str();
+    qualityCmd->add_option("--smooth", quality.smooth, "our default rows' rounds of smoothing")
+        ->capture_default_str();
     qualityCmd->add_option("--splashsurf", quality.splashsurf,
                            "splashsurf's program, e.g. "
                            "/tmp/peers-new/splashsurf-0.14.0/target/release/splashsurf");

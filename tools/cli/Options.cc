@@ -129,9 +129,25 @@ void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
     cmd->add_option("--color-field", f.colorFieldThreshold,
                     "color field below this: surface particle")
         ->capture_default_str();
-    cmd->add_option("--field", o.field, "ssp07 or zb05")
+    cmd->add_option("--field", o.field,
+                    "ssp07, zb05, or ssp07-aniso (SSP07 with anisotropic kernels, [YT10]'s PCA: "
+                    "flatter faces; on the CPU for now)")
         ->capture_default_str()
-        ->check(CLI::IsMember({"ssp07", "zb05"}));
+        ->check(CLI::IsMember({"ssp07", "zb05", "ssp07-aniso"}));
+    cmd->add_option("--aniso-ratio", f.anisotropyRatio,
+                    "ssp07-aniso: a kernel's longest axis over its shortest (R), at most (k_r)")
+        ->capture_default_str()
+        ->check(CLI::Range(1.0, 8.0));
+    rel("--aniso-radius", f.anisotropyRadius, "ssp07-aniso: radius of each particle's PCA, in r");
+    cmd->add_option("--aniso-neighbours", f.anisotropyNeighbours,
+                    "ssp07-aniso: fewer neighbours within the PCA radius keep the sphere (N_eps)")
+        ->capture_default_str()
+        ->check(CLI::Range(0, 10000));
+    cmd->add_option("--centre-smoothing", f.centreSmoothing,
+                    "ssp07-aniso: how far a surface particle's kernel centre moves to its "
+                    "neighbours' mean, 0 to 1 (lambda)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 1.0));
     cmd->add_option("--method", o.method, "narrow-band, or the baselines gather-full and scatter")
         ->capture_default_str()
         ->check(CLI::IsMember({"narrow-band", "gather-full", "scatter"}));

@@ -129,6 +129,10 @@ const std::vector<Entry>& table()
         FS_INT("splash_neighbours", kField, field.splashNeighbours, 0, 1000000),
         FS_REAL("color_field", kField, field.colorFieldThreshold, nonNegative),
         FS_CHOICE("field", kField, field.field, fieldFromName, fieldName),
+        FS_REAL("aniso_ratio", kField, field.anisotropyRatio, real),
+        FS_POSITIVE("aniso_radius", anisotropyRadius),
+        FS_INT("aniso_neighbours", kField, field.anisotropyNeighbours, 0, 10000),
+        FS_REAL("centre_smoothing", kField, field.centreSmoothing, real),
         FS_CHOICE("method", kField, field.method, methodFromName, methodName),
         Entry{"ignore_radius_attribute", kField,
               [](Settings& s, py::handle v) {

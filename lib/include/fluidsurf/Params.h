@@ -15,7 +15,12 @@ namespace fluidsurf {
 /// Which scalar field is evaluated at the grid vertices.
 enum class FieldKind {
     Ssp07, ///< Solenthaler et al. 2007: phi = |x - xbar| - rbar * f(EV_max of grad xbar)
-    Zb05   ///< Zhu & Bridson 2005: the same with f == 1 (faster, blobs in concave regions)
+    Zb05,  ///< Zhu & Bridson 2005: the same with f == 1 (faster, blobs in concave regions)
+    /// SSP07 with [YT10]'s anisotropic kernels (issue 64): each surface particle's kernel
+    /// stretched along the fluid's surface, from the PCA of its neighbours
+    /// (anisotropy/KernelShapes.h, field/AnisotropicField.h); flatter faces. On the CPU for now
+    /// (with --device cuda too), narrow band only, not adaptive.
+    Ssp07Aniso
 };
 
 /// How the field is computed. All three give the same field (up to float rounding for
@@ -47,6 +52,20 @@ struct Params
     bool keepIsolated = false; ///< isolated particles join the field as spheres of radius r
                                ///< (default: left out of the grid and reported)
     FieldKind field = FieldKind::Ssp07;
+    /// Ssp07Aniso: a kernel's longest axis over its shortest (which stays R) at most, k_r of
+    /// [YT10]; 1 gives SSP07's field. 1.5 left no more components than SSP07 on every real frame;
+    /// 1.75 and 2 made a jittered slab flatter still, but split thin sheets off (issue 64).
+    double anisotropyRatio = 1.5;
+    /// Ssp07Aniso: the radius of each particle's PCA; default 8r (2h, as [YT10]: within h a
+    /// particle of a flat face has about 17 neighbours, too few for a stable PCA).
+    double anisotropyRadius = 0;
+    /// Ssp07Aniso: a particle with fewer neighbours within anisotropyRadius keeps the sphere
+    /// (N_eps of [YT10]).
+    int anisotropyNeighbours = 25;
+    /// Ssp07Aniso: how far a surface particle's kernel centre moves to its neighbours' weighted
+    /// mean, lambda of [YT10], [0, 1]. Theirs, 0.9, took a jittered slab's top face below its
+    /// particles' centres; 0.1 made it bumpier than 0 (issue 64).
+    double centreSmoothing = 0;
     FieldMethod method = FieldMethod::NarrowBand;
     /// The curvature-adaptive 3-level grid of thesis chapter 6 (fluidsurf/AdaptiveGrid.h):
     /// voxelSize becomes the finest level (3); flat parts of the surface are sampled at

@@ -40,9 +40,21 @@ void sphere(float* g, double radius)
 
 } // namespace
 
+ShapeParams shapeParams(const Params& params)
+{
+    ShapeParams s;
+    s.influenceRadius = params.influenceRadius;
+    s.pcaRadius = params.anisotropyRadius;
+    s.maxAxisRatio = params.anisotropyRatio;
+    s.minNeighbours = params.anisotropyNeighbours;
+    s.sparseScale = 1;
+    s.centreSmoothing = params.centreSmoothing;
+    return s;
+}
+
 double maxReach(const ShapeParams& p)
 {
-    return std::max(std::pow(p.maxAxisRatio, 2.0 / 3.0), p.sparseScale);
+    return std::max(p.maxAxisRatio, p.sparseScale);
 }
 
 KernelShapes kernelShapes(const neighbors::CellIndex& index,
@@ -107,7 +119,7 @@ KernelShapes kernelShapes(const neighbors::CellIndex& index,
                 double t[3];
                 for (int k = 0; k < 3; ++k)
                     t[k] = std::max(e.values[k], s1 / p.maxAxisRatio);
-                const double scale = p.influenceRadius / std::cbrt(t[0] * t[1] * t[2]);
+                const double scale = p.influenceRadius / t[2]; // the shortest axis: R
                 double inv[3];
                 for (int k = 0; k < 3; ++k)
                     inv[k] = 1 / (scale * t[k]);
@@ -127,6 +139,29 @@ KernelShapes kernelShapes(const neighbors::CellIndex& index,
             stretched += myStretched, sparse += mySparse;
         });
     out.stretched = stretched, out.sparse = sparse;
+    return out;
+}
+
+KernelParticles kernelParticles(const neighbors::CellIndex& index,
+                                const classify::Classification& classes, const KernelShapes& shapes,
+                                bool keepIsolated, double cellSize, Context& ctx)
+{
+    const size_t n = index.size();
+    std::vector<Vec3f> centres;
+    std::vector<float> radii, kept;
+    centres.reserve(n), kept.reserve(6 * n);
+    for (size_t i = 0; i < n; ++i) {
+        if (!keepIsolated && classes.classes[i] == classify::Isolated) continue;
+        centres.push_back(shapes.centres[i]);
+        if (!index.radii.empty()) radii.push_back(index.radii[i]);
+        kept.insert(kept.end(), &shapes.shapes[6 * i], &shapes.shapes[6 * i] + 6);
+    }
+    KernelParticles out;
+    out.centres = neighbors::buildCellIndex(centres.data(), radii.empty() ? nullptr : radii.data(),
+                                            centres.size(), cellSize, ctx);
+    out.shapes.resize(kept.size());
+    for (size_t k = 0; k < centres.size(); ++k)
+        std::copy_n(&kept[6 * size_t(out.centres.order[k])], 6, &out.shapes[6 * k]);
     return out;
 }
 

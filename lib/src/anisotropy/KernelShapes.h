@@ -8,7 +8,7 @@
 //   mean      m_i = sum w_ij x_j / sum w_ij
 //   spread    C_i = sum w_ij (x_j - m_i)(x_j - m_i)^T / sum w_ij = R diag(s1 >= s2 >= s3) R^T
 //   clamped   t_k = max(s_k, s1 / k_r)            (no axis shorter than a k_r-th of the longest)
-//   axes      e_k = R_inf t_k / cbrt(t1 t2 t3)   (the ellipsoid's volume is the sphere's: R_inf^3)
+//   axes      e_k = R_inf t_k / t3               (the shortest axis R_inf, the others longer)
 //   shape     G_i = R diag(1 / e_k) R^T          (|G_i d| < 1: offset d inside the support)
 //   centre    c_i = (1 - lambda) x_i + lambda m_i
 // A particle with fewer than N_eps neighbours (other than itself) keeps the sphere, G_i =
@@ -16,14 +16,18 @@
 // them is wasted work, and what they add to the field near the surface is smooth already.
 //
 // Where YT10 scale the clamped spread by k_s = 1400 (a constant for their scenes' units), the
-// axes here are normalised to the sphere's volume instead: the same for any unit of length, and
-// the kernel's support (what the narrow band must cover) is at most R_inf k_r^(2/3) along an axis.
+// axes here are scaled so that the shortest is the isotropic kernel's R_inf: the same for any
+// unit of length, and kernels only grow, along the surface. Scaled to the sphere's volume
+// instead (so the normal axis shrinks below R_inf), a face particle's kernel no longer reached
+// the layer beneath it, and the gap became cavities (two in a jittered slab at k_r = 4) and
+// broke thin sheets. The support (what the gather must cover) is at most k_r R_inf.
 #pragma once
 
 #include "classify/Classify.h"
 #include "neighbors/CellIndex.h"
 
 #include <fluidsurf/Context.h>
+#include <fluidsurf/Params.h>
 #include <fluidsurf/Vec3.h>
 
 #include <cstddef>
@@ -32,6 +36,7 @@
 namespace fluidsurf {
 namespace anisotropy {
 
+/// (The defaults are [YT10]'s; the pipeline's come from Params through shapeParams.)
 struct ShapeParams
 {
     double influenceRadius = 0; ///< R_inf: the isotropic kernel's radius, world units
@@ -43,8 +48,11 @@ struct ShapeParams
         0.9; ///< lambda: how far a centre moves to its neighbours' mean, [0, 1]
 };
 
-/// The most a kernel reaches from its centre along any direction, in R_inf: what the band and the
-/// gather must cover (k_r^(2/3), or k_n when larger).
+/// The pipeline's: Params' anisotropy fields (Params.h), R_inf = influenceRadius.
+ShapeParams shapeParams(const Params& params);
+
+/// The most a kernel reaches from its centre along any direction, in R_inf: what the gather must
+/// cover (k_r, or k_n when larger).
 double maxReach(const ShapeParams& params);
 
 struct KernelShapes
@@ -62,6 +70,17 @@ struct KernelShapes
 KernelShapes kernelShapes(const neighbors::CellIndex& index,
                           const classify::Classification& classes, const ShapeParams& params,
                           Context& ctx);
+
+/// The field's particles: the kernels' centres indexed anew (cells of cellSize; radii as the
+/// index had them), isolated ones left out unless kept, with each one's G in that index's order.
+struct KernelParticles
+{
+    neighbors::CellIndex centres;
+    util::NoInitVector<float> shapes; ///< 6 a particle, in centres' order
+};
+KernelParticles kernelParticles(const neighbors::CellIndex& index,
+                                const classify::Classification& classes, const KernelShapes& shapes,
+                                bool keepIsolated, double cellSize, Context& ctx);
 
 } // namespace anisotropy
 } // namespace fluidsurf

@@ -1,7 +1,9 @@
 // CpuBackend.cc - the backend on the CPU (TBB): the stages of neighbors/, classify/, narrowband/
 // and field/, in order, each timed in the context.
+#include "anisotropy/KernelShapes.h"
 #include "backend/Backend.h"
 #include "backend/CpuStages.h"
+#include "field/AnisotropicField.h"
 #include "field/GatherField.h"
 #include "mesh/MarchingCubes.h"
 #include "narrowband/NarrowBand.h"
@@ -72,6 +74,21 @@ public:
             out.tree = std::make_shared<openvdb::FloatTree>(*band, float(params.background(level)),
                                                             openvdb::TopologyCopy());
         }
+        if (params.field == FieldKind::Ssp07Aniso) {
+            const anisotropy::ShapeParams sp = anisotropy::shapeParams(params);
+            anisotropy::KernelShapes shapes;
+            {
+                const auto t = ctx.scope("kernel shapes");
+                shapes = anisotropy::kernelShapes(c.index, c.classes, sp, ctx);
+            }
+            const auto t = ctx.scope("field");
+            mKernels = anisotropy::kernelParticles(c.index, c.classes, shapes, params.keepIsolated,
+                                                   params.influenceRadius, ctx);
+            mReach = anisotropy::maxReach(sp) * params.influenceRadius;
+            mParticles = nullptr;
+            out.evaluations = evaluate(*out.tree, params, level, ctx);
+            return true;
+        }
         const auto t = ctx.scope("field");
         mOwned = fieldParticles(std::move(c), params);
         mParticles = &mOwned;
@@ -84,6 +101,9 @@ public:
     size_t evaluate(openvdb::FloatTree& tree, const Params& params, const Level& level,
                     Context& ctx) override
     {
+        if (params.field == FieldKind::Ssp07Aniso) // (narrowBand made the kernels)
+            return field::evaluateAnisotropicField(tree, mKernels.centres, mKernels.shapes.data(),
+                                                   mReach, params, level, ctx);
         if (!mParticles) throw Error("CPU backend: evaluate() before the particles were given");
         return field::evaluateField(tree, *mParticles, params, level, ctx);
     }
@@ -98,6 +118,8 @@ public:
 private:
     neighbors::CellIndex mOwned;
     const neighbors::CellIndex* mParticles = nullptr;
+    anisotropy::KernelParticles mKernels; ///< Ssp07Aniso: the kernels' centres and shapes
+    double mReach = 0;                    ///< and how far the longest reaches
 };
 
 } // namespace

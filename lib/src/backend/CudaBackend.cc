@@ -64,7 +64,7 @@ cuda::FieldSettings fieldSettings(const Params& params, const Level& level)
     f.radius = params.radius;
     f.tLow = params.tLow, f.tHigh = params.tHigh;
     f.background = float(params.background(level));
-    f.ssp07 = params.field == FieldKind::Ssp07;
+    f.ssp07 = params.field != FieldKind::Zb05;
     return f;
 }
 
@@ -182,6 +182,10 @@ public:
     bool narrowBand(const Particles& particles, const Params& params, const Level& level,
                     double width, Context& ctx, Band& out, std::string& whyNot) override
     {
+        if (params.field == FieldKind::Ssp07Aniso) { // (issue 64: the device's gather is next)
+            whyNot = "the ssp07-aniso field runs on the CPU for now";
+            return false;
+        }
         const std::vector<Vec3f>& positions = particles.positions;
         const std::vector<float>& radii = particles.radii;
         if (positions.empty()) { // nothing for the device to do

@@ -132,7 +132,7 @@ inline FieldConstants fieldConstants(const Params& p, const Level& level, bool p
     c.influenceRadius = p.influenceRadius;
     c.radius = p.radius;
     c.perParticleRadii = perParticleRadii;
-    c.ssp07 = p.field == FieldKind::Ssp07;
+    c.ssp07 = p.field != FieldKind::Zb05; // Ssp07Aniso keeps the f-correction
     c.tLow = p.tLow;
     c.tHigh = p.tHigh;
     c.background = float(p.background(level));

@@ -34,6 +34,7 @@ Params ReconstructParams::fieldParams(double r) const
     p.influenceRadius = field.influenceRadius * r;
     p.smoothingLength = field.smoothingLength * r;
     p.bandWidth = field.bandWidth * r;
+    p.anisotropyRadius = field.anisotropyRadius * r;
     return p;
 }
 
