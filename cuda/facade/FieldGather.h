@@ -23,6 +23,7 @@ namespace cuda {
 struct FieldSettings
 {
     double voxelSize = 0, influenceRadius = 0, radius = 0, tLow = 0.4, tHigh = 3.5;
+    double radiusScale = 1; ///< Params::radiusScale
     float background = 0;
     bool ssp07 = true;
 };

@@ -410,6 +410,7 @@ field::FieldConstants fieldConstants(const FieldSettings& s, bool perParticleRad
     field::FieldConstants c;
     c.influenceRadius = s.influenceRadius;
     c.radius = s.radius;
+    c.radiusScale = s.radiusScale;
     c.perParticleRadii = perParticleRadii;
     c.ssp07 = s.ssp07;
     c.tLow = s.tLow, c.tHigh = s.tHigh;

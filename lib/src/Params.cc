@@ -69,6 +69,9 @@ void Params::validate() const
     if (!std::isfinite(tLow) || !std::isfinite(tHigh) || !(tLow < tHigh))
         throw ValueError("t_low must be smaller than t_high (got " + std::to_string(tLow) + ", " +
                          std::to_string(tHigh) + ")");
+    if (!(radiusScale >= 0.5 && radiusScale <= 2))
+        throw ValueError("radius scale must be in [0.5, 2] (got " + std::to_string(radiusScale) +
+                         ")");
     if (surfaceNeighbours < 0 || splashNeighbours < 0)
         throw ValueError("neighbour thresholds must not be negative");
     if (!std::isfinite(colorFieldThreshold) || colorFieldThreshold < 0)

@@ -98,6 +98,7 @@ ReconstructParams defaultParams(const QualityBenchOptions& o, double r)
 {
     ReconstructParams p = ReconstructParams::fromRadius(r);
     p.field.field = fieldFromName(o.field);
+    p.field.radiusScale = o.radiusScale;
     p.post.smooth = o.smooth;
     return p;
 }
@@ -115,9 +116,9 @@ ReconstructParams rawParams(const QualityBenchOptions& o, double r)
 int runQualityBench(const QualityBenchOptions& o)
 {
     const bool peer = !o.splashsurf.empty();
-    std::printf("fluidsurf_bench quality: field %s, %d rounds of smoothing; voxel = r, R = 4r (our "
-                "defaults)%s\n\n",
-                o.field.c_str(), o.smooth,
+    std::printf("fluidsurf_bench quality: field %s, radius scale %g, %d rounds of smoothing; voxel "
+                "= r, R = 4r (our defaults)%s\n\n",
+                o.field.c_str(), o.radiusScale, o.smooth,
                 peer ? "; splashsurf in the same run: smoothed `-l 2.0 -c 1.0 -t 0.6 "
                        "--mesh-smoothing-weights=on --mesh-smoothing-iters=25 --mesh-cleanup=on`, "
                        "raw `-l 2.0 -c 1.0 -t 0.6`"

@@ -120,6 +120,11 @@ void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
     rel("--half-width", f.halfWidth, "level-set background, in voxels");
     cmd->add_option("--t-low", f.tLow, "SSP07 t_low")->capture_default_str();
     cmd->add_option("--t-high", f.tHigh, "SSP07 t_high")->capture_default_str();
+    cmd->add_option("--radius-scale", f.radiusScale,
+                    "phi = |x - xbar| - S rbar f: 1 is SSP07 as published (a flat face 0.87 r "
+                    "above its particles), 1.096 puts a lattice face at r")
+        ->capture_default_str()
+        ->check(CLI::Range(0.5, 2.0));
     cmd->add_option("--surface-neighbours", f.surfaceNeighbours,
                     "fewer neighbours within h: surface particle")
         ->capture_default_str();

@@ -125,6 +125,7 @@ const std::vector<Entry>& table()
         FS_POSITIVE("half_width", halfWidth),
         FS_REAL("t_low", kField, field.tLow, real),
         FS_REAL("t_high", kField, field.tHigh, real),
+        FS_REAL("radius_scale", kField, field.radiusScale, real),
         FS_INT("surface_neighbours", kField, field.surfaceNeighbours, 0, 1000000),
         FS_INT("splash_neighbours", kField, field.splashNeighbours, 0, 1000000),
         FS_REAL("color_field", kField, field.colorFieldThreshold, nonNegative),

@@ -41,6 +41,10 @@ struct Params
                                 ///< default 2r (at least r + voxelSize is used, see NarrowBand.h)
     double tLow = 0.4;          ///< EV_max below this: f = 1 (eq. 4.2)
     double tHigh = 3.5;         ///< EV_max at or above this: f = 0 (eq. 4.3, clamped)
+    /// phi = |x - xbar| - radiusScale * rbar * f: 1 is SSP07 as published. Its surface lies
+    /// 0.87 r above a flat lattice face's particle centres, not r, so a block encloses 5% less
+    /// than its particles' N (2r)^3; 1.096 puts that face at r (issue 64). [0.5, 2].
+    double radiusScale = 1.0;
     int surfaceNeighbours = 25; ///< fewer neighbours within h: surface particle (thesis 4.2.2)
     int splashNeighbours = 3;   ///< fewer neighbours within h: splash particle (ch. 6)
     double colorFieldThreshold = 0.9;     ///< color field (eq. 4.6) below this: surface particle;

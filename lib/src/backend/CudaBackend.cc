@@ -62,6 +62,7 @@ cuda::FieldSettings fieldSettings(const Params& params, const Level& level)
     f.voxelSize = level.voxelSize;
     f.influenceRadius = params.influenceRadius;
     f.radius = params.radius;
+    f.radiusScale = params.radiusScale;
     f.tLow = params.tLow, f.tHigh = params.tHigh;
     f.background = float(params.background(level));
     f.ssp07 = params.field != FieldKind::Zb05;

@@ -23,7 +23,8 @@ struct FieldSums
 struct FieldConstants
 {
     double influenceRadius = 0;
-    double radius = 0; ///< uniform r (used when perParticleRadii is false)
+    double radius = 0;      ///< uniform r (used when perParticleRadii is false)
+    double radiusScale = 1; ///< rbar's factor (Params::radiusScale)
     bool perParticleRadii = false;
     bool ssp07 = true;
     double tLow = 0.4, tHigh = 3.5;
@@ -101,7 +102,7 @@ FLUIDSURF_HD inline float fieldValue(const FieldSums& s, const FieldConstants& c
     const double inv = 1 / s.w;
     const double xb[3] = {s.d[0] * inv, s.d[1] * inv, s.d[2] * inv};
     const double dist = sqrt(xb[0] * xb[0] + xb[1] * xb[1] + xb[2] * xb[2]);
-    const double rbar = c.perParticleRadii ? s.r * inv : c.radius;
+    const double rbar = (c.perParticleRadii ? s.r * inv : c.radius) * c.radiusScale;
     double f = 1;
     if (c.ssp07) {
         const double k = 6 / (c.influenceRadius * c.influenceRadius) * inv;

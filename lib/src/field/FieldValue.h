@@ -131,6 +131,7 @@ inline FieldConstants fieldConstants(const Params& p, const Level& level, bool p
     FieldConstants c;
     c.influenceRadius = p.influenceRadius;
     c.radius = p.radius;
+    c.radiusScale = p.radiusScale;
     c.perParticleRadii = perParticleRadii;
     c.ssp07 = p.field != FieldKind::Zb05; // Ssp07Aniso keeps the f-correction
     c.tLow = p.tLow;

@@ -63,7 +63,7 @@ FLUIDSURF_AVX2 void values4(const FieldSums* s, const FieldConstants& c, float* 
     const D4 inv = 1 / w;
     const D4 xb[3] = {d[0] * inv, d[1] * inv, d[2] * inv};
     const D4 dist = WideOps::root(xb[0] * xb[0] + xb[1] * xb[1] + xb[2] * xb[2]);
-    const D4 rbar = c.perParticleRadii ? r * inv : splat(c.radius);
+    const D4 rbar = (c.perParticleRadii ? r * inv : splat(c.radius)) * splat(c.radiusScale);
     D4 f = splat(1.0);
     if (c.ssp07) {
         const D4 k = 6 / (c.influenceRadius * c.influenceRadius) * inv;

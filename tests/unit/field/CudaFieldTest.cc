@@ -93,6 +93,9 @@ TEST(FieldCuda, MatchesCpuOnGeneratedScenesAndSettings)
         Params zb = Params::fromRadius(sp.radius);
         zb.field = FieldKind::Zb05;
         expectSameField(ps, zb, std::string(sceneName(scene)) + "_zb05");
+        Params scaled = Params::fromRadius(sp.radius);
+        scaled.radiusScale = 1.096;
+        expectSameField(ps, scaled, std::string(sceneName(scene)) + "_radius_scale");
         Params full = Params::fromRadius(sp.radius);
         full.method = FieldMethod::GatherFull;
         expectSameField(ps, full, std::string(sceneName(scene)) + "_gather_full");
@@ -108,6 +111,8 @@ TEST(FieldCuda, MatchesCpuOnGeneratedScenesAndSettings)
     Params p = Params::fromRadius(sp.radius);
     p.keepIsolated = true;
     expectSameField(ps, p, "drop_pscale_keep_isolated");
+    p.radiusScale = 1.096;
+    expectSameField(ps, p, "drop_pscale_radius_scale");
 }
 
 TEST(FieldCuda, MatchesCpuOnSparseAndDegenerateFrames)

@@ -268,6 +268,42 @@ TEST(FieldReferenceCuda, SingleParticleIsASphereOfRadiusR)
     singleParticleIsASphere(Device::Cuda);
 }
 
+namespace {
+/// The lowest and highest zero crossing of phi along z above a 40 x 40 x 4 lattice slab's top
+/// layer, in columns away from its edges (at least 100 of them).
+struct Face
+{
+    double lo = 1e9, hi = -1e9, top = 0;
+};
+
+Face latticeFace(const ParticleSet& ps, const Params& p, const RasterizeResult& res, int layers)
+{
+    const double r = p.radius, dx = p.voxelSize;
+    Face f;
+    f.top = (layers - 1) * 2 * r;
+    openvdb::FloatGrid::ConstAccessor acc = res.grid->getConstAccessor();
+    const int margin = int(std::ceil((p.influenceRadius + 2 * r) / dx));
+    const int extent = int(std::floor(39 * 2 * r / dx));
+    size_t columns = 0;
+    for (int i = margin; i <= extent - margin; ++i)
+        for (int j = margin; j <= extent - margin; ++j) {
+            for (int k = int(std::floor(f.top / dx)); k < int(std::ceil((f.top + 3 * r) / dx));
+                 ++k) {
+                const float a = acc.getValue({i, j, k}), b = acc.getValue({i, j, k + 1});
+                if (a < 0 && b >= 0) {
+                    EXPECT_TRUE(acc.isValueOn({i, j, k}) && acc.isValueOn({i, j, k + 1}));
+                    const double z = (k + a / (a - b)) * dx;
+                    f.lo = std::min(f.lo, z), f.hi = std::max(f.hi, z);
+                    ++columns;
+                }
+            }
+        }
+    EXPECT_GT(columns, 100u);
+    (void)ps;
+    return f;
+}
+} // namespace
+
 TEST(FieldReference, LatticeSlabIsAPlane)
 {
     SceneParams sp;
@@ -277,29 +313,35 @@ TEST(FieldReference, LatticeSlabIsAPlane)
     const ParticleSet ps = generateScene(Scene::Slab, sp);
     const Params p = Params::fromRadius(sp.radius);
     const RasterizeResult res = rasterizeParticles(ps, p);
-    const double r = sp.radius, dx = p.voxelSize, top = (sp.layers - 1) * 2 * r;
-    // Zero crossing of phi along z above the top layer, in columns away from the slab's edges.
-    openvdb::FloatGrid::ConstAccessor acc = res.grid->getConstAccessor();
-    const int margin = int(std::ceil((p.influenceRadius + 2 * r) / dx));
-    const int extent = int(std::floor(39 * 2 * r / dx));
-    double lo = 1e9, hi = -1e9;
-    size_t columns = 0;
-    for (int i = margin; i <= extent - margin; ++i)
-        for (int j = margin; j <= extent - margin; ++j) {
-            for (int k = int(std::floor(top / dx)); k < int(std::ceil((top + 3 * r) / dx)); ++k) {
-                const float a = acc.getValue({i, j, k}), b = acc.getValue({i, j, k + 1});
-                if (a < 0 && b >= 0) {
-                    ASSERT_TRUE(acc.isValueOn({i, j, k}) && acc.isValueOn({i, j, k + 1}));
-                    const double z = (k + a / (a - b)) * dx;
-                    lo = std::min(lo, z), hi = std::max(hi, z);
-                    ++columns;
-                }
-            }
-        }
-    ASSERT_GT(columns, 100u);
-    EXPECT_LE(hi - lo, 0.05 * r) << "plane deviation";
-    EXPECT_GT(lo, top) << "surface above the outer particle centres";
-    EXPECT_LT(hi, top + r) << "surface within r of the outer particle centres";
-    RecordProperty("slab_surface_offset_in_r", std::to_string((0.5 * (lo + hi) - top) / r));
+    const double r = sp.radius;
+    const Face f = latticeFace(ps, p, res, sp.layers);
+    EXPECT_LE(f.hi - f.lo, 0.05 * r) << "plane deviation";
+    EXPECT_GT(f.lo, f.top) << "surface above the outer particle centres";
+    EXPECT_LT(f.hi, f.top + r) << "surface within r of the outer particle centres";
+    RecordProperty("slab_surface_offset_in_r", std::to_string((0.5 * (f.lo + f.hi) - f.top) / r));
     expectParticlesInside(*res.grid, ps, res.isolatedParticles, "slab");
+}
+
+TEST(FieldReference, RadiusScalePutsALatticeFaceAtR)
+{
+    // SSP07's face lies 0.870 r above the top centres; |x - xbar| is 1.0866 r at height r and f
+    // 0.9916 there (a separate double-precision computation over a half-space lattice), so a radius
+    // scale of 1.096 puts the face at r. A voxel of r/4: phi is not linear in z, and at voxel r the
+    // crossing interpolated between voxels lies 0.03 r lower.
+    SceneParams sp;
+    sp.count = 40 * 40 * 4;
+    sp.layers = 4;
+    sp.jitter = 0;
+    const ParticleSet ps = generateScene(Scene::Slab, sp);
+    const double r = sp.radius;
+    Params p = Params::fromRadius(r);
+    p.voxelSize = 0.25 * r;
+    const Face plain = latticeFace(ps, p, rasterizeParticles(ps, p), sp.layers);
+    EXPECT_NEAR(0.5 * (plain.lo + plain.hi) - plain.top, 0.870 * r, 0.02 * r);
+    p.radiusScale = 1.096;
+    const Face scaled = latticeFace(ps, p, rasterizeParticles(ps, p), sp.layers);
+    EXPECT_NEAR(0.5 * (scaled.lo + scaled.hi) - scaled.top, r, 0.02 * r);
+    EXPECT_LE(scaled.hi - scaled.lo, 0.05 * r) << "plane deviation";
+    p.radiusScale = 2.5;
+    EXPECT_THROW(p.validate(), ValueError);
 }
