@@ -65,5 +65,20 @@ bool gatherFits(double voxelSize, double influenceRadius);
 std::vector<float> gatherField(const GatherInput& input, GatherTimes* times = nullptr,
                                void* stream = nullptr);
 
+/// The ssp07-aniso field's kernels (lib/src/field/AnisotropicField.h): gather.positions are their
+/// centres in cell order (gather.radii their radii or null), and per kernel in that order
+struct AnisotropicInput
+{
+    GatherInput gather;
+    const float* a = nullptr;      ///< 6 a kernel: A' = R^2 G^2 (xx, xy, xz, yy, yz, zz)
+    const float* extent = nullptr; ///< 3 a kernel: its box's half extents, world units
+    double reach = 0;              ///< the most any kernel reaches, world units
+};
+
+/// phi for the 512 voxels of every leaf of in.gather, as gatherField returns them, with the CPU's
+/// bits (AnisotropicGather.cu). Throws fluidsurf::Error on CUDA errors.
+std::vector<float> gatherAnisotropicField(const AnisotropicInput& in, GatherTimes* times = nullptr,
+                                          void* stream = nullptr);
+
 } // namespace cuda
 } // namespace fluidsurf

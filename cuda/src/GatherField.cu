@@ -3,6 +3,7 @@
 // the CPU runs. Deterministic: every run sums each voxel's particles in the same order.
 #include "facade/FieldGather.h"
 
+#include "LeafCells.cuh"
 #include "Stages.cuh"
 
 #include "field/GatherLayout.h"
@@ -22,10 +23,8 @@ namespace {
 // and FieldMath's fieldValue finishes. So phi has the CPU's bits where the CPU sums on 8 lanes
 // (field::fieldLanes(): AVX2 and FMA), and the meshes made from it are the CPU's, post-processing
 // included. The file is built with --fmad=false: nothing else is fused.
-constexpr int kThreads = 256;   // a block a leaf; 8 threads a voxel, one for each lane
-constexpr int kCellChunk = 512; // occupied-cell lookups per pass
+constexpr int kThreads = kLeafThreads; // a block a leaf; 8 threads a voxel, one for each lane
 constexpr int kGroups = kThreads / 8;
-static_assert(kCellChunk % kThreads == 0 && kThreads % 32 == 0, "whole warps, whole rounds");
 
 using field::GatherLayout;
 
@@ -74,83 +73,6 @@ __device__ bool leafBox(const Params& p, size_t leaf, double o[3], double lo[3],
     return true;
 }
 
-/// The block's threads with `keep`, numbered in thread order from `kept` (shared), which then
-/// counts them too: where each writes, in order. All threads call it (it synchronises).
-__device__ uint32_t keptSlot(bool keep, int* warpFound, uint32_t& kept)
-{
-    const unsigned found = __ballot_sync(0xffffffffu, keep);
-    const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
-    if (lane == 0) warpFound[warp] = __popc(found);
-    __syncthreads();
-    uint32_t at = kept + __popc(found & ((1u << lane) - 1u));
-    for (int w = 0; w < warp; ++w)
-        at += warpFound[w];
-    __syncthreads(); // (every thread has read `kept`)
-    if (threadIdx.x == 0)
-        for (int w = 0; w < kThreads / 32; ++w)
-            kept += warpFound[w];
-    __syncthreads();
-    return at;
-}
-
-/// Walks the occupied cells of the leaf's box in the CPU's order (z, then y, then x), a chunk of
-/// cells at a time, and calls visit(cellBegin, cellPrefix, cells) with the chunk's occupied cells
-/// compacted in that order (all threads, block-uniform).
-template <typename Visit>
-__device__ void forEachCellChunk(const Params& p, const double o[3], const double lo[3],
-                                 const double hi[3], uint32_t* cellBegin, uint32_t* cellPrefix,
-                                 int* warpFound, uint32_t& cellsInChunk, Visit&& visit)
-{
-    long long c0[3], c1[3];
-    for (int a = 0; a < 3; ++a) {
-        c0[a] = cellCoord(p.cells, o[a] + lo[a], a);
-        c1[a] = cellCoord(p.cells, o[a] + hi[a], a);
-    }
-    const long long nx = c1[0] - c0[0] + 1, ny = c1[1] - c0[1] + 1, nz = c1[2] - c0[2] + 1;
-    const long long boxCells = nx * ny * nz;
-    for (long long chunk = 0; chunk < boxCells; chunk += kCellChunk) {
-        if (threadIdx.x == 0) cellsInChunk = 0;
-        __syncthreads();
-        for (int round = 0; round < kCellChunk / kThreads; ++round) {
-            const long long c = chunk + round * kThreads + threadIdx.x;
-            long long at = -1;
-            if (c < boxCells)
-                at =
-                    findCell(p.cells, c0[0] + c % nx, c0[1] + (c / nx) % ny, c0[2] + c / (nx * ny));
-            const uint32_t slot = keptSlot(at >= 0, warpFound, cellsInChunk);
-            if (at >= 0) {
-                cellBegin[slot] = p.cells.starts[at];
-                cellPrefix[slot + 1] = p.cells.starts[at + 1] - p.cells.starts[at];
-            }
-        }
-        __syncthreads();
-        const int cells = int(cellsInChunk);
-        if (threadIdx.x == 0) {
-            cellPrefix[0] = 0;
-            for (int i = 0; i < cells; ++i)
-                cellPrefix[i + 1] += cellPrefix[i];
-        }
-        __syncthreads();
-        visit(cellBegin, cellPrefix, cells);
-        __syncthreads();
-    }
-}
-
-/// Particle flat of a chunk's cells (flat < cellPrefix[cells]).
-__device__ uint32_t particleAt(const uint32_t* cellBegin, const uint32_t* cellPrefix, int cells,
-                               uint32_t flat)
-{
-    int lo = 0, hi = cells - 1; // the last cell whose prefix <= flat
-    while (lo < hi) {
-        const int mid = (lo + hi + 1) / 2;
-        if (cellPrefix[mid] <= flat)
-            lo = mid;
-        else
-            hi = mid - 1;
-    }
-    return cellBegin[lo] + (flat - cellPrefix[lo]);
-}
-
 /// Leaf-local coordinates of particle i (the CPU's: the difference in double), and whether it
 /// lies inside the open box (lo, hi).
 __device__ bool localOf(const Params& p, uint32_t i, const double o[3], const double lo[3],
@@ -183,7 +105,7 @@ __global__ void __launch_bounds__(kThreads) countKernel(Params p)
         return;
     }
     if (threadIdx.x == 0) sh.total = 0;
-    forEachCellChunk(p, o, lo, hi, sh.cellBegin, sh.cellPrefix, sh.warpFound, sh.cellsInChunk,
+    forEachCellChunk(p.cells, o, lo, hi, sh.cellBegin, sh.cellPrefix, sh.warpFound, sh.cellsInChunk,
                      [&](const uint32_t* begin, const uint32_t* prefix, int cells) {
                          uint32_t n = 0;
                          double l[3];
@@ -254,31 +176,31 @@ __global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
     if (threadIdx.x == 0) sh.total = 0, sh.activeCount = 0;
     __syncthreads();
     if (any)
-        forEachCellChunk(p, o, lo, hi, sh.cellBegin, sh.cellPrefix, sh.warpFound, sh.cellsInChunk,
-                         [&](const uint32_t* begin, const uint32_t* prefix, int cells) {
-                             const uint32_t n = prefix[cells];
-                             for (uint32_t tile = 0; tile < n; tile += kThreads) {
-                                 const uint32_t f = tile + threadIdx.x;
-                                 double l[3];
-                                 uint32_t i = 0;
-                                 bool in = false;
-                                 if (f < n) {
-                                     i = particleAt(begin, prefix, cells, f);
-                                     in = localOf(p, i, o, lo, hi, l);
-                                 }
-                                 const uint32_t at = keptSlot(in, sh.warpFound, sh.total);
-                                 if (in) {
-                                     const float lz = float(l[2]);
-                                     const uint32_t bucket = uint32_t(
-                                         (g.slabOf(lz) * B + g.binOf(l[0])) * B + g.binOf(l[1]));
-                                     gathered[at] =
-                                         make_float4(float(l[0]), float(l[1]), lz,
-                                                     p.cells.radii ? p.cells.radii[i] : 0.f);
-                                     bucketOf[at] = bucket;
-                                     atomicAdd(&bucketEnd[bucket], 1u);
-                                 }
-                             }
-                         });
+        forEachCellChunk(
+            p.cells, o, lo, hi, sh.cellBegin, sh.cellPrefix, sh.warpFound, sh.cellsInChunk,
+            [&](const uint32_t* begin, const uint32_t* prefix, int cells) {
+                const uint32_t n = prefix[cells];
+                for (uint32_t tile = 0; tile < n; tile += kThreads) {
+                    const uint32_t f = tile + threadIdx.x;
+                    double l[3];
+                    uint32_t i = 0;
+                    bool in = false;
+                    if (f < n) {
+                        i = particleAt(begin, prefix, cells, f);
+                        in = localOf(p, i, o, lo, hi, l);
+                    }
+                    const uint32_t at = keptSlot(in, sh.warpFound, sh.total);
+                    if (in) {
+                        const float lz = float(l[2]);
+                        const uint32_t bucket =
+                            uint32_t((g.slabOf(lz) * B + g.binOf(l[0])) * B + g.binOf(l[1]));
+                        gathered[at] = make_float4(float(l[0]), float(l[1]), lz,
+                                                   p.cells.radii ? p.cells.radii[i] : 0.f);
+                        bucketOf[at] = bucket;
+                        atomicAdd(&bucketEnd[bucket], 1u);
+                    }
+                }
+            });
     __syncthreads();
     const uint32_t total = sh.total;
 

@@ -55,6 +55,34 @@ neighbors::CellIndex fieldParticles(Classified&& c, const Params& params)
     return out;
 }
 
+void narrowBandOnCpu(const Classified& c, const Params& params, const Level& level, double width,
+                     Context& ctx, Band& out)
+{
+    const auto t = ctx.scope("narrow band");
+    const openvdb::MaskTree::Ptr band =
+        narrowband::buildNarrowBand(c.index, c.classes, params, level, width, ctx);
+    out.tree = std::make_shared<openvdb::FloatTree>(*band, float(params.background(level)),
+                                                    openvdb::TopologyCopy());
+}
+
+std::unique_ptr<AnisotropicStage> anisotropicStage(const Classified& c, const Params& params,
+                                                   Context& ctx)
+{
+    const auto t = ctx.scope("kernel shapes");
+    const anisotropy::ShapeParams sp = anisotropy::shapeParams(params);
+    auto stage = std::make_unique<AnisotropicStage>();
+    {
+        const anisotropy::KernelShapes shapes =
+            anisotropy::kernelShapes(c.index, c.classes, sp, ctx);
+        stage->kernels = anisotropy::kernelParticles(
+            c.index, c.classes, shapes, params.keepIsolated, params.influenceRadius, ctx);
+    }
+    stage->table =
+        field::anisotropicKernels(stage->kernels.centres, stage->kernels.shapes.data(),
+                                  anisotropy::maxReach(sp) * params.influenceRadius, params);
+    return stage;
+}
+
 namespace {
 
 class CpuBackend : public Backend
@@ -67,24 +95,10 @@ public:
     {
         // the classes alone: the band and the field's particles need nothing else
         Classified c = classifyOnCpu(particles, params, ctx, out);
-        {
-            const auto t = ctx.scope("narrow band");
-            const openvdb::MaskTree::Ptr band =
-                narrowband::buildNarrowBand(c.index, c.classes, params, level, width, ctx);
-            out.tree = std::make_shared<openvdb::FloatTree>(*band, float(params.background(level)),
-                                                            openvdb::TopologyCopy());
-        }
+        narrowBandOnCpu(c, params, level, width, ctx, out);
         if (params.field == FieldKind::Ssp07Aniso) {
-            const anisotropy::ShapeParams sp = anisotropy::shapeParams(params);
-            anisotropy::KernelShapes shapes;
-            {
-                const auto t = ctx.scope("kernel shapes");
-                shapes = anisotropy::kernelShapes(c.index, c.classes, sp, ctx);
-            }
+            mAniso = anisotropicStage(c, params, ctx);
             const auto t = ctx.scope("field");
-            mKernels = anisotropy::kernelParticles(c.index, c.classes, shapes, params.keepIsolated,
-                                                   params.influenceRadius, ctx);
-            mReach = anisotropy::maxReach(sp) * params.influenceRadius;
             mParticles = nullptr;
             out.evaluations = evaluate(*out.tree, params, level, ctx);
             return true;
@@ -101,9 +115,10 @@ public:
     size_t evaluate(openvdb::FloatTree& tree, const Params& params, const Level& level,
                     Context& ctx) override
     {
-        if (params.field == FieldKind::Ssp07Aniso) // (narrowBand made the kernels)
-            return field::evaluateAnisotropicField(tree, mKernels.centres, mKernels.shapes.data(),
-                                                   mReach, params, level, ctx);
+        if (params.field == FieldKind::Ssp07Aniso) { // (narrowBand made the kernels)
+            if (!mAniso) throw Error("CPU backend: evaluate() before the kernels were made");
+            return field::evaluateAnisotropicField(tree, mAniso->table, params, level, ctx);
+        }
         if (!mParticles) throw Error("CPU backend: evaluate() before the particles were given");
         return field::evaluateField(tree, *mParticles, params, level, ctx);
     }
@@ -118,8 +133,7 @@ public:
 private:
     neighbors::CellIndex mOwned;
     const neighbors::CellIndex* mParticles = nullptr;
-    anisotropy::KernelParticles mKernels; ///< Ssp07Aniso: the kernels' centres and shapes
-    double mReach = 0;                    ///< and how far the longest reaches
+    std::unique_ptr<AnisotropicStage> mAniso; ///< Ssp07Aniso: the kernels
 };
 
 } // namespace

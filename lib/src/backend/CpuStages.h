@@ -3,9 +3,13 @@
 // and classify on the CPU whatever the backend.
 #pragma once
 
+#include "anisotropy/KernelShapes.h"
 #include "backend/Backend.h"
 #include "classify/Classify.h"
+#include "field/AnisotropicField.h"
 #include "neighbors/CellIndex.h"
+
+#include <memory>
 
 namespace fluidsurf {
 namespace backend {
@@ -25,6 +29,22 @@ Classified classifyOnCpu(const Particles& particles, const Params& params, Conte
 /// The index without its isolated particles (they take no part in the field), unless kept.
 /// c is left empty: its index and classes are given back before the field is evaluated.
 neighbors::CellIndex fieldParticles(Classified&& c, const Params& params);
+
+/// "narrow band": the band's topology from the classes (thesis §4.2.1) into out.tree, every
+/// active voxel at the background until the field fills it.
+void narrowBandOnCpu(const Classified& c, const Params& params, const Level& level, double width,
+                     Context& ctx, Band& out);
+
+/// The ssp07-aniso field's kernels ("kernel shapes"): their shapes, their centres indexed anew
+/// and what the gather needs of each. Made in place and never moved (table points at
+/// kernels.centres); both backends gather from it, the CUDA one after uploading it.
+struct AnisotropicStage
+{
+    anisotropy::KernelParticles kernels;
+    field::AnisotropicKernels table;
+};
+std::unique_ptr<AnisotropicStage> anisotropicStage(const Classified& c, const Params& params,
+                                                   Context& ctx);
 
 } // namespace backend
 } // namespace fluidsurf

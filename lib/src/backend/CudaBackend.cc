@@ -7,6 +7,7 @@
 #include <fluidsurf/Error.h>
 
 #ifdef FLUIDSURF_HAS_CUDA
+#include "backend/CpuStages.h"
 #include "classify/Classify.h"
 #include "field/GatherField.h"
 #include "mesh/MarchingCubes.h"
@@ -183,10 +184,18 @@ public:
     bool narrowBand(const Particles& particles, const Params& params, const Level& level,
                     double width, Context& ctx, Band& out, std::string& whyNot) override
     {
-        if (params.field == FieldKind::Ssp07Aniso) { // (issue 64: the device's gather is next)
-            whyNot = "the ssp07-aniso field runs on the CPU for now";
-            return false;
+        if (params.field == FieldKind::Ssp07Aniso) {
+            // The classes, the band and the kernels' shapes on the CPU (their device versions
+            // are issue 65's), the field on the device.
+            Classified c = classifyOnCpu(particles, params, ctx, out);
+            narrowBandOnCpu(c, params, level, width, ctx, out);
+            mAniso = anisotropicStage(c, params, ctx);
+            mPipeline.reset(), mIndex = nullptr, mCpuField = false;
+            const auto t = ctx.scope("field");
+            out.evaluations = evaluate(*out.tree, params, level, ctx);
+            return true;
         }
+        mAniso.reset();
         const std::vector<Vec3f>& positions = particles.positions;
         const std::vector<float>& radii = particles.radii;
         if (positions.empty()) { // nothing for the device to do
@@ -264,13 +273,33 @@ public:
     void useParticles(const neighbors::CellIndex& particles) override
     {
         mIndex = &particles;
-        mPipeline.reset();
+        mPipeline.reset(), mAniso.reset();
+    }
+
+    /// The ssp07-aniso field of tree's active voxels on the device, from the kernels narrowBand
+    /// made (uploaded on each call: the band's completion calls a few times).
+    size_t evaluateAnisotropic(openvdb::FloatTree& tree, const Params& params, const Level& level)
+    {
+        if (!mAniso) throw Error("CUDA backend: evaluate() before the kernels were made");
+        const neighbors::CellIndex& centres = mAniso->kernels.centres;
+        const field::AnisotropicKernels& table = mAniso->table;
+        cuda::GatherTimes times;
+        const size_t evaluations =
+            fillActiveVoxels(tree, [&](const int32_t* origins, const uint64_t* masks, size_t n) {
+                cuda::AnisotropicInput in;
+                in.gather = gatherInput(centres, origins, masks, n, params, level);
+                in.a = table.a.data(), in.extent = table.extent.data(), in.reach = table.reach;
+                return cuda::gatherAnisotropicField(in, &times);
+            });
+        noteGather(times);
+        return evaluations;
     }
 
     size_t evaluate(openvdb::FloatTree& tree, const Params& params, const Level& level,
                     Context& ctx) override
     {
         ctx.throwIfCancelled();
+        if (params.field == FieldKind::Ssp07Aniso) return evaluateAnisotropic(tree, params, level);
         if (mPipeline) // the particles are on the device already
             return fillActiveVoxels(tree,
                                     [&](const int32_t* origins, const uint64_t* masks, size_t n) {
@@ -283,29 +312,43 @@ public:
         cuda::GatherTimes times;
         const size_t evaluations =
             fillActiveVoxels(tree, [&](const int32_t* origins, const uint64_t* masks, size_t n) {
-                cuda::GatherInput in;
-                in.positions = particles.positions.data();
-                in.radii = particles.radii.empty() ? nullptr : particles.radii.data();
-                in.particleCount = particles.size();
-                in.tableKeys = particles.tableKeys.data();
-                in.tableCells = particles.tableCells.data();
-                in.tableSize = particles.tableKeys.size();
-                in.cellStarts = particles.starts.data();
-                in.cellCount = particles.cellCount();
-                in.cellSize = particles.cellSize;
-                for (int a = 0; a < 3; ++a)
-                    in.cellOrigin[a] = particles.origin[a], in.cellDims[a] = particles.dims[a];
-                in.leafOrigins = origins;
-                in.leafActive = masks;
-                in.leafCount = n;
-                in.field = fieldSettings(params, level);
-                return cuda::gatherField(in, &times);
+                return cuda::gatherField(gatherInput(particles, origins, masks, n, params, level),
+                                         &times);
             });
+        noteGather(times);
+        return evaluations;
+    }
+
+    /// The facade's view of a cell index and of the leaves to fill.
+    static cuda::GatherInput gatherInput(const neighbors::CellIndex& particles,
+                                         const int32_t* origins, const uint64_t* masks, size_t n,
+                                         const Params& params, const Level& level)
+    {
+        cuda::GatherInput in;
+        in.positions = particles.positions.data();
+        in.radii = particles.radii.empty() ? nullptr : particles.radii.data();
+        in.particleCount = particles.size();
+        in.tableKeys = particles.tableKeys.data();
+        in.tableCells = particles.tableCells.data();
+        in.tableSize = particles.tableKeys.size();
+        in.cellStarts = particles.starts.data();
+        in.cellCount = particles.cellCount();
+        in.cellSize = particles.cellSize;
+        for (int a = 0; a < 3; ++a)
+            in.cellOrigin[a] = particles.origin[a], in.cellDims[a] = particles.dims[a];
+        in.leafOrigins = origins;
+        in.leafActive = masks;
+        in.leafCount = n;
+        in.field = fieldSettings(params, level);
+        return in;
+    }
+
+    void noteGather(const cuda::GatherTimes& times)
+    {
         mGatherStages = {{"upload", times.uploadMs * 1e-3},
                          {"gather", times.kernelMs * 1e-3},
                          {"download", times.downloadMs * 1e-3}};
         mGatherBytes = times.deviceBytes;
-        return evaluations;
     }
 
     void deviceStats(RasterizeStats& stats) const override
@@ -367,6 +410,7 @@ private:
     std::string mName;
     std::unique_ptr<cuda::NarrowBandPipeline> mPipeline; // holds the particles on the device
     const neighbors::CellIndex* mIndex = nullptr;
+    std::unique_ptr<AnisotropicStage> mAniso; ///< ssp07-aniso: the kernels (CPU-made)
     std::vector<StageTime> mGatherStages;
     size_t mGatherBytes = 0;
     bool mCpuField = false; ///< evaluate() ran the CPU's gather (see kSupportTooWide)

@@ -1,128 +1,437 @@
-// AnisotropicField.cc - the anisotropic SSP07 field, a scalar gather per leaf (see the header).
+// AnisotropicField.cc - the anisotropic SSP07 field (see the header). Per leaf, the kernels whose
+// boxes reach its active voxels, leaf-local, in the cell index's order; per 2 x 2 x 2 block of
+// voxels, those that can reach the block (a test eight kernels a register); then the block's
+// eight voxels on the eight lanes of a register, kernel after kernel (AnisotropicSums.h says why
+// that order gives the same bits for any superset of kernels, which is what lets the device test
+// voxel by voxel).
+//
+// Why blocks and voxel lanes rather than SSP07's kernel lanes (GatherField.cc): each kernel has its
+// own shape, so a voxel's neighbours no longer follow from slabs and columns of one radius, and
+// with one voxel's candidates on the lanes, the bits would hang on which candidates were tested
+// (a kernel that adds zero still moves the later ones to other lanes).
+// addKernel takes 8-float registers here, always inlined into functions compiled for AVX2, so no
+// call passes one; GCC still warns at the template, which is compiled for the default target.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
 #include "field/AnisotropicField.h"
 
+#include "field/AnisotropicSums.h"
 #include "field/FieldValue.h"
+#include "field/FieldValueWide.h"
+#include "field/GatherField.h"
+#include "util/Lanes.h"
+#include "util/SetBits.h"
+
+#include <fluidsurf/Error.h>
 
 #include <openvdb/tree/LeafManager.h>
+
+#include <immintrin.h>
 
 #include <tbb/parallel_for.h>
 
 #include <atomic>
-#include <climits>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 namespace fluidsurf {
 namespace field {
 
-size_t evaluateAnisotropicField(openvdb::FloatTree& tree, const neighbors::CellIndex& centres,
-                                const float* shapes, double reach, const Params& params,
-                                const Level& level, Context& ctx)
+namespace {
+
+using LeafT = openvdb::FloatTree::LeafNodeType;
+using util::WideLanes;
+
+/// Kernels, leaf-local, in the cell index's order: structure of arrays, padded to a multiple of 8
+/// with kernels no test picks (stretch -1: a negative bound).
+struct KernelArrays
 {
-    const bool radii = !centres.radii.empty();
-    const FieldConstants constants = fieldConstants(params, level, radii);
-    const double dx = level.voxelSize, R2 = params.influenceRadius * params.influenceRadius;
-    // Each kernel's bounding box, half extents sqrt((G^-2)_aa) (a little wider against rounding):
-    // a voxel reads only the kernels whose boxes hold it, in the same order, so culling by box
-    // changes no bit (a kernel outside its box adds exactly nothing). The leaf's gather reaches as
-    // far as the longest kernel; a voxel's column keeps about a tenth of what the leaf gathers.
+    static constexpr int kArrays = 11; // cx, cy, cz, a0..a5, r, stretch
+    std::vector<float> v[kArrays];
+    size_t size = 0;
+
+    float* at(int k) { return v[k].data(); }
+    const float* at(int k) const { return v[k].data(); }
+    /// room for n kernels and the padding, size 0
+    void reserveFor(size_t n)
+    {
+        for (auto& a : v)
+            if (a.size() < n + 16) a.resize(n + 16);
+        size = 0;
+    }
+    void pad()
+    {
+        for (size_t j = size; j < (size + 7) / 8 * 8; ++j) {
+            for (int k = 0; k < kArrays - 1; ++k)
+                v[k][j] = 0.f;
+            v[kArrays - 1][j] = -1.f;
+        }
+    }
+    size_t paddedSize() const { return (size + 7) / 8 * 8; }
+};
+enum : int { kCx, kCy, kCz, kA0, kR = kA0 + 6, kStretch };
+
+/// The test of a box of voxels whose points lie within h of b (leaf-local): a voxel x lies within
+/// h of b, so with H the root of A', |H (c - x)| >= |H (c - b)| - stretch h, and a kernel that
+/// reaches x (|H (c - x)| < R) has d.A'd < (R + stretch h)^2 at b; 1e-3 more against the float
+/// rounding of d.A'd. (Whether the test is exact decides no bit: see AnisotropicSums.h.)
+struct BoxTest
+{
+    float bx, by, bz, h, R;
+};
+
+/// Kernel j of k passes t.
+inline bool passes(const KernelArrays& k, size_t j, const BoxTest& t)
+{
+    const float ex = k.v[kCx][j] - t.bx, ey = k.v[kCy][j] - t.by, ez = k.v[kCz][j] - t.bz;
+    const float* a[6] = {&k.v[kA0][j],     &k.v[kA0 + 1][j], &k.v[kA0 + 2][j],
+                         &k.v[kA0 + 3][j], &k.v[kA0 + 4][j], &k.v[kA0 + 5][j]};
+    const float q = *a[0] * ex * ex + *a[3] * ey * ey + *a[5] * ez * ez +
+                    2.f * (*a[1] * ex * ey + *a[2] * ex * ez + *a[4] * ey * ez);
+    const float reachOf = t.R + k.v[kStretch][j] * t.h;
+    return q < reachOf * reachOf * 1.001f && k.v[kStretch][j] >= 0.f;
+}
+
+/// The kernels of from that pass t, into to (in order), one at a time; or their indices into
+/// picked (to null).
+uint32_t pickNarrow(const KernelArrays& from, const BoxTest& t, KernelArrays* to, uint32_t* picked)
+{
+    uint32_t n = 0;
+    for (size_t j = 0; j < from.size; ++j) {
+        if (!passes(from, j, t)) continue;
+        if (to)
+            for (int a = 0; a < KernelArrays::kArrays; ++a)
+                to->v[a][n] = from.v[a][j];
+        else
+            picked[n] = uint32_t(j);
+        ++n;
+    }
+    if (to) to->size = n, to->pad();
+    return n;
+}
+
+/// pickNarrow eight kernels a register with AVX2: the passing lanes packed to the front by one
+/// permute (util::kSetBits) and stored whole.
+__attribute__((target("avx2"))) uint32_t pickWide(const KernelArrays& from, const BoxTest& t,
+                                                  KernelArrays* to, uint32_t* picked)
+{
+    uint32_t n = 0;
+    const __m256i step = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    for (size_t j = 0; j < from.paddedSize(); j += 8) {
+        WideLanes l[KernelArrays::kArrays];
+        for (int a = 0; a < KernelArrays::kArrays; ++a)
+            std::memcpy(&l[a], &from.v[a][j], sizeof l[a]);
+        const WideLanes ex = l[kCx] - t.bx, ey = l[kCy] - t.by, ez = l[kCz] - t.bz;
+        const WideLanes* a = &l[kA0];
+        const WideLanes q = a[0] * ex * ex + a[3] * ey * ey + a[5] * ez * ez +
+                            2.f * (a[1] * ex * ey + a[2] * ex * ez + a[4] * ey * ez);
+        const WideLanes reachOf = t.R + l[kStretch] * t.h;
+        const auto in = (q < reachOf * reachOf * 1.001f) & (l[kStretch] >= 0.f);
+        const unsigned mask = unsigned(_mm256_movemask_ps(__m256(in)));
+        __m256i order;
+        std::memcpy(&order, util::kSetBits.positions[mask], sizeof order);
+        if (to)
+            for (int c = 0; c < KernelArrays::kArrays; ++c)
+                _mm256_storeu_ps(&to->v[c][n], _mm256_permutevar8x32_ps(__m256(l[c]), order));
+        else
+            _mm256_storeu_si256(reinterpret_cast<__m256i*>(&picked[n]),
+                                _mm256_permutevar8x32_epi32(
+                                    _mm256_add_epi32(_mm256_set1_epi32(int(j)), step), order));
+        n += util::kSetBits.count[mask];
+    }
+    if (to) to->size = n, to->pad();
+    return n;
+}
+
+/// addKernel's operations on eight floats with AVX2 and FMA.
+struct WideOps
+{
+    __attribute__((target("avx2,fma"))) static WideLanes fma(WideLanes a, WideLanes b, WideLanes c)
+    {
+        return WideLanes(_mm256_fmadd_ps(__m256(a), __m256(b), __m256(c)));
+    }
+    __attribute__((target("avx2,fma"))) static WideLanes fnma(WideLanes a, WideLanes b, WideLanes c)
+    {
+        return WideLanes(_mm256_fnmadd_ps(__m256(a), __m256(b), __m256(c)));
+    }
+    __attribute__((target("avx2"))) static WideLanes one() { return WideLanes{} + 1.f; }
+    __attribute__((target("avx2"))) static WideLanes cut(WideLanes t)
+    {
+        return t > 1e-6f ? t : WideLanes{};
+    }
+    /// no early way out: eight voxels of a block rarely all miss a picked kernel
+    static bool none(WideLanes) { return false; }
+};
+
+/// The sums of a block's eight voxels (lane l at (vx[l], vy[l], vz[l]), leaf-local) over the
+/// kernels picked[0, n) of k, in order.
+template <bool Radii>
+__attribute__((target("avx2,fma"))) void
+blockSumsWide(const KernelArrays& k, const uint32_t* picked, uint32_t n, const float* vx,
+              const float* vy, const float* vz, float invR2, FieldSums out[8])
+{
+    WideLanes x, y, z;
+    std::memcpy(&x, vx, sizeof x), std::memcpy(&y, vy, sizeof y), std::memcpy(&z, vz, sizeof z);
+    const WideLanes scale = WideLanes{} + invR2;
+    AnisotropicAccumulator<WideLanes> s;
+    for (uint32_t p = 0; p < n; ++p) {
+        const uint32_t j = picked[p];
+        const WideLanes c[3] = {WideLanes{} + k.v[kCx][j], WideLanes{} + k.v[kCy][j],
+                                WideLanes{} + k.v[kCz][j]};
+        const WideLanes a[6] = {WideLanes{} + k.v[kA0][j],     WideLanes{} + k.v[kA0 + 1][j],
+                                WideLanes{} + k.v[kA0 + 2][j], WideLanes{} + k.v[kA0 + 3][j],
+                                WideLanes{} + k.v[kA0 + 4][j], WideLanes{} + k.v[kA0 + 5][j]};
+        addKernel<WideOps, Radii>(s, c, a, WideLanes{} + k.v[kR][j], x, y, z, scale);
+    }
+    for (int l = 0; l < 8; ++l)
+        out[l] = toSums(s.w[l], s.d0[l], s.d1[l], s.d2[l], s.r[l], s.g0[l], s.g1[l], s.g2[l],
+                        s.m0[l], s.m1[l], s.m2[l], s.m3[l], s.m4[l], s.m5[l]);
+}
+
+/// blockSumsWide for one voxel on one float: the same operations.
+template <bool Radii>
+FieldSums voxelSums(const KernelArrays& k, const uint32_t* picked, uint32_t n, float vx, float vy,
+                    float vz, float invR2)
+{
+    AnisotropicAccumulator<float> s;
+    for (uint32_t p = 0; p < n; ++p) {
+        const uint32_t j = picked[p];
+        const float c[3] = {k.v[kCx][j], k.v[kCy][j], k.v[kCz][j]};
+        const float a[6] = {k.v[kA0][j],     k.v[kA0 + 1][j], k.v[kA0 + 2][j],
+                            k.v[kA0 + 3][j], k.v[kA0 + 4][j], k.v[kA0 + 5][j]};
+        addKernel<ScalarFloatOps, Radii>(s, c, a, k.v[kR][j], vx, vy, vz, invR2);
+    }
+    return toSums(s.w, s.d0, s.d1, s.d2, s.r, s.g0, s.g1, s.g2, s.m0, s.m1, s.m2, s.m3, s.m4, s.m5);
+}
+
+/// The active bits of the 2 x 2 x 2 block at (i, j, k) of a leaf, bit l for voxel (i + (l >> 2 &
+/// 1), j + (l >> 1 & 1), k + (l & 1)) (the lanes' order).
+unsigned blockBits(const LeafT::NodeMaskType& mask, int i, int j, int k)
+{
+    unsigned bits = 0;
+    for (int l = 0; l < 8; ++l)
+        bits |= unsigned(mask.isOn(((i + (l >> 2 & 1)) << 6) | ((j + (l >> 1 & 1)) << 3) |
+                                   (k + (l & 1))))
+                << l;
+    return bits;
+}
+
+/// One task's arrays, reused from leaf to leaf.
+struct Scratch
+{
+    explicit Scratch(const neighbors::CellIndex& index) : cells(index) {}
+    neighbors::NearbyCells cells;
+    KernelArrays leaf, quarter;   ///< the leaf's kernels; those of one 4 x 4 x 4 quarter of it
+    std::vector<uint32_t> picked; ///< one block's, indices into quarter
+};
+
+struct Gather
+{
+    const AnisotropicKernels& kernels;
+    FieldConstants constants;
+    double dx;
+    float invR2;
+    bool radii, wide;
+
+    /// The kernels whose boxes overlap the box of the leaf's active voxels, leaf-local, in the
+    /// cell index's order.
+    void gather(const LeafT& leaf, Scratch& s) const
+    {
+        const neighbors::CellIndex& centres = *kernels.centres;
+        const openvdb::Coord o = leaf.origin();
+        const double origin[3] = {o.x() * dx, o.y() * dx, o.z() * dx};
+        int first[3] = {7, 7, 7}, last[3] = {0, 0, 0};
+        for (auto v = leaf.cbeginValueOn(); v; ++v) {
+            const openvdb::Coord c = v.getCoord() - o;
+            for (int a = 0; a < 3; ++a)
+                first[a] = std::min(first[a], c[a]), last[a] = std::max(last[a], c[a]);
+        }
+        double lo[3], hi[3], cellLo[3], cellHi[3];
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = origin[a] + first[a] * dx, hi[a] = origin[a] + last[a] * dx;
+            cellLo[a] = lo[a] - kernels.reach, cellHi[a] = hi[a] + kernels.reach;
+        }
+        size_t m = 0;
+        s.cells.forEachCellInBox(cellLo, cellHi, [&](uint32_t b, uint32_t e) { m += e - b; });
+        KernelArrays& k = s.leaf;
+        k.reserveFor(m);
+        size_t n = 0;
+        s.cells.forEachCellInBox(cellLo, cellHi, [&](uint32_t b, uint32_t e) {
+            for (uint32_t j = b; j < e; ++j) {
+                const Vec3f& p = centres.positions[j];
+                const float* ext = &kernels.extent[3 * size_t(j)];
+                bool overlaps = true;
+                for (int a = 0; a < 3; ++a)
+                    overlaps &= p[a] + ext[a] >= lo[a] && p[a] - ext[a] <= hi[a];
+                if (!overlaps) continue;
+                k.v[kCx][n] = float(double(p.x) - origin[0]);
+                k.v[kCy][n] = float(double(p.y) - origin[1]);
+                k.v[kCz][n] = float(double(p.z) - origin[2]);
+                for (int c = 0; c < 6; ++c)
+                    k.v[kA0 + c][n] = kernels.a[6 * size_t(j) + c];
+                k.v[kR][n] = radii ? centres.radii[j] : 0.f;
+                k.v[kStretch][n] = kernels.stretch[j];
+                ++n;
+            }
+        });
+        k.size = n;
+        k.pad();
+    }
+
+    size_t leaf(LeafT& leaf, Scratch& s) const
+    {
+        const auto& mask = leaf.getValueMask();
+        if (mask.isOff()) return 0;
+        gather(leaf, s);
+        s.quarter.reserveFor(s.leaf.size);
+        s.picked.resize(s.leaf.size + 16);
+        constexpr int kBatch = 64;
+        FieldSums sum[kBatch];
+        int at[kBatch], m = 0;
+        size_t evaluations = 0;
+        auto flush = [&] {
+            float value[kBatch];
+            if (wide)
+                fieldValuesWide(sum, m, constants, value);
+            else
+                for (int q = 0; q < m; ++q)
+                    value[q] = fieldValue(sum[q], constants);
+            for (int q = 0; q < m; ++q)
+                leaf.setValueOnly(at[q], value[q]);
+            evaluations += size_t(m);
+            m = 0;
+        };
+        float local[8]; // leaf-local coordinates of voxel indices 0..7
+        for (int i = 0; i < 8; ++i)
+            local[i] = float(i * dx);
+        const float R = float(constants.influenceRadius), root3 = float(std::sqrt(3.0));
+        // Quarters (4 x 4 x 4 voxels) first, then their 2 x 2 x 2 blocks: each test reads a
+        // shorter list (a block's test against the whole leaf's kernels was half the stage).
+        for (int q = 0; q < 8; ++q) {
+            const int qi = 4 * (q >> 2 & 1), qj = 4 * (q >> 1 & 1), qk = 4 * (q & 1);
+            unsigned blocks[8], any = 0;
+            for (int b = 0; b < 8; ++b)
+                any |= blocks[b] =
+                    blockBits(mask, qi + 2 * (b >> 2 & 1), qj + 2 * (b >> 1 & 1), qk + 2 * (b & 1));
+            if (!any) continue;
+            const BoxTest quarter{float((qi + 1.5) * dx), float((qj + 1.5) * dx),
+                                  float((qk + 1.5) * dx), float(1.5 * dx) * root3, R};
+            (wide ? pickWide : pickNarrow)(s.leaf, quarter, &s.quarter, nullptr);
+            for (int b = 0; b < 8; ++b) {
+                const unsigned bits = blocks[b];
+                if (!bits) continue;
+                const int i = qi + 2 * (b >> 2 & 1), j = qj + 2 * (b >> 1 & 1),
+                          kz = qk + 2 * (b & 1);
+                const BoxTest block{float((i + 0.5) * dx), float((j + 0.5) * dx),
+                                    float((kz + 0.5) * dx), float(0.5 * dx) * root3, R};
+                const uint32_t n =
+                    (wide ? pickWide : pickNarrow)(s.quarter, block, nullptr, s.picked.data());
+                float vx[8], vy[8], vz[8];
+                for (int l = 0; l < 8; ++l)
+                    vx[l] = local[i + (l >> 2 & 1)], vy[l] = local[j + (l >> 1 & 1)],
+                    vz[l] = local[kz + (l & 1)];
+                FieldSums voxels[8];
+                const uint32_t* picked = s.picked.data();
+                if (wide && radii)
+                    blockSumsWide<true>(s.quarter, picked, n, vx, vy, vz, invR2, voxels);
+                else if (wide)
+                    blockSumsWide<false>(s.quarter, picked, n, vx, vy, vz, invR2, voxels);
+                else
+                    for (int l = 0; l < 8; ++l)
+                        if (bits >> l & 1)
+                            voxels[l] = radii ? voxelSums<true>(s.quarter, picked, n, vx[l], vy[l],
+                                                                vz[l], invR2)
+                                              : voxelSums<false>(s.quarter, picked, n, vx[l], vy[l],
+                                                                 vz[l], invR2);
+                if (m + 8 > kBatch) flush();
+                for (int l = 0; l < 8; ++l)
+                    if (bits >> l & 1) {
+                        at[m] =
+                            ((i + (l >> 2 & 1)) << 6) | ((j + (l >> 1 & 1)) << 3) | (kz + (l & 1));
+                        sum[m++] = voxels[l];
+                    }
+            }
+        }
+        flush();
+        return evaluations;
+    }
+};
+
+} // namespace
+
+AnisotropicKernels anisotropicKernels(const neighbors::CellIndex& centres, const float* shapes,
+                                      double reach, const Params& params)
+{
     const size_t n = centres.size();
-    std::vector<float> extent(3 * n);
+    const double R = params.influenceRadius;
+    AnisotropicKernels t;
+    t.centres = &centres, t.reach = reach;
+    t.a.resize(6 * n), t.extent.resize(3 * n), t.stretch.resize(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const auto& r) {
         for (size_t j = r.begin(); j != r.end(); ++j) {
             const float* g = shapes + 6 * j;
             const double m[3][3] = {{g[0], g[1], g[2]}, {g[1], g[3], g[4]}, {g[2], g[4], g[5]}};
+            double a[3][3];
+            for (int p = 0; p < 3; ++p)
+                for (int q = 0; q < 3; ++q)
+                    a[p][q] = R * R * (m[p][0] * m[0][q] + m[p][1] * m[1][q] + m[p][2] * m[2][q]);
+            const int upper[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+            for (int k = 0; k < 6; ++k)
+                t.a[6 * j + k] = float(a[upper[k][0]][upper[k][1]]);
+            double lambda = 0; // Gershgorin: no eigenvalue above the largest row sum
+            for (int p = 0; p < 3; ++p)
+                lambda =
+                    std::max(lambda, std::fabs(a[p][0]) + std::fabs(a[p][1]) + std::fabs(a[p][2]));
+            t.stretch[j] = float(std::sqrt(lambda) * 1.0001);
             const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
                                m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
                                m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-            for (int a = 0; a < 3; ++a) {
-                double sum = 0; // row a of G^-1 (the adjugate over det), squared
-                for (int b = 0; b < 3; ++b) {
-                    const int a1 = (b + 1) % 3, a2 = (b + 2) % 3, b1 = (a + 1) % 3,
-                              b2 = (a + 2) % 3;
-                    const double inv = (m[a1][b1] * m[a2][b2] - m[a1][b2] * m[a2][b1]) / det;
+            for (int p = 0; p < 3; ++p) {
+                double sum = 0; // row p of G^-1 (the adjugate over det), squared
+                for (int q = 0; q < 3; ++q) {
+                    const int p1 = (q + 1) % 3, p2 = (q + 2) % 3, q1 = (p + 1) % 3,
+                              q2 = (p + 2) % 3;
+                    const double inv = (m[p1][q1] * m[p2][q2] - m[p1][q2] * m[p2][q1]) / det;
                     sum += inv * inv;
                 }
-                extent[3 * j + a] = float(std::sqrt(sum) * 1.001 + 1e-6 * reach);
+                t.extent[3 * j + p] = float(std::sqrt(sum) * 1.001 + 1e-6 * reach);
             }
         }
     });
+    return t;
+}
+
+size_t evaluateAnisotropicField(openvdb::FloatTree& tree, const AnisotropicKernels& kernels,
+                                const Params& params, const Level& level, Context& ctx)
+{
+    return detail::evaluateAnisotropicField(tree, kernels, params, level, ctx,
+                                            fieldLanes() == util::kWideLanes);
+}
+
+size_t detail::evaluateAnisotropicField(openvdb::FloatTree& tree, const AnisotropicKernels& kernels,
+                                        const Params& params, const Level& level, Context& ctx,
+                                        bool wide)
+{
+    if (wide && fieldLanes() != util::kWideLanes)
+        throw ValueError("evaluateAnisotropicField: the wide sums need a CPU with AVX2 and FMA");
+    if (!kernels.centres) throw ValueError("evaluateAnisotropicField: no kernels");
+    const bool radii = !kernels.centres->radii.empty();
+    const double R = params.influenceRadius;
+    const Gather gather{kernels,         fieldConstants(params, level, radii),
+                        level.voxelSize, float(1 / (R * R)),
+                        radii,           wide};
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
     std::atomic<size_t> evaluations{0};
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.leafCount(), 4), [&](const auto& r) {
-        ctx.checkpoint();
-        neighbors::NearbyCells cells(centres);
-        std::vector<uint32_t> near, column;
-        size_t mine = 0;
-        for (size_t l = r.begin(); l != r.end(); ++l) {
-            auto& leaf = leaves.leaf(l);
-            const openvdb::Coord o = leaf.origin();
-            double lo[3], hi[3];
-            for (int a = 0; a < 3; ++a)
-                lo[a] = o[a] * dx - reach, hi[a] = (o[a] + 7) * dx + reach;
-            near.clear();
-            cells.forEachCellInBox(lo, hi, [&](uint32_t b, uint32_t e) {
-                for (uint32_t j = b; j < e; ++j) {
-                    const Vec3f& p = centres.positions[j];
-                    const float* ext = &extent[3 * size_t(j)];
-                    bool overlaps = true;
-                    for (int a = 0; a < 3; ++a)
-                        overlaps &=
-                            p[a] + ext[a] >= lo[a] + reach && p[a] - ext[a] <= hi[a] - reach;
-                    if (overlaps) near.push_back(j);
-                }
-            });
-            int columnX = INT32_MIN, columnY = INT32_MIN;
-            for (auto v = leaf.beginValueOn(); v; ++v) {
-                const openvdb::Coord c = v.getCoord();
-                const double x[3] = {c.x() * dx, c.y() * dx, c.z() * dx};
-                if (c.x() != columnX || c.y() != columnY) { // the kernels over this (x, y)
-                    columnX = c.x(), columnY = c.y();
-                    column.clear();
-                    for (uint32_t j : near) {
-                        const Vec3f& p = centres.positions[j];
-                        const float* ext = &extent[3 * size_t(j)];
-                        if (std::fabs(p.x - x[0]) <= ext[0] && std::fabs(p.y - x[1]) <= ext[1])
-                            column.push_back(j);
-                    }
-                }
-                FieldSums s;
-                for (uint32_t j : column) {
-                    const Vec3f& p = centres.positions[j];
-                    if (!(std::fabs(p.z - x[2]) <= extent[3 * size_t(j) + 2])) continue;
-                    const double d[3] = {p.x - x[0], p.y - x[1], p.z - x[2]};
-                    const float* g = shapes + 6 * size_t(j);
-                    const double u[3] = {g[0] * d[0] + g[1] * d[1] + g[2] * d[2],
-                                         g[1] * d[0] + g[3] * d[1] + g[4] * d[2],
-                                         g[2] * d[0] + g[4] * d[1] + g[5] * d[2]};
-                    const double t = 1 - (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-                    if (!(t > 1e-6)) continue;
-                    const double t2 = t * t, w = t2 * t;
-                    s.w += w;
-                    for (int a = 0; a < 3; ++a)
-                        s.d[a] += w * d[a];
-                    if (radii) s.r += w * centres.radii[j];
-                    // A d = G (G d) = G u, scaled by R^2 so that a sphere gives A' = I (FieldMath
-                    // multiplies by 6 / R^2)
-                    const double ad[3] = {R2 * (g[0] * u[0] + g[1] * u[1] + g[2] * u[2]),
-                                          R2 * (g[1] * u[0] + g[3] * u[1] + g[4] * u[2]),
-                                          R2 * (g[2] * u[0] + g[4] * u[1] + g[5] * u[2])};
-                    for (int a = 0; a < 3; ++a)
-                        s.g[a] += t2 * ad[a];
-                    // the symmetric part of d (A d)^T
-                    s.m[0] += t2 * d[0] * ad[0];
-                    s.m[1] += t2 * 0.5 * (d[0] * ad[1] + d[1] * ad[0]);
-                    s.m[2] += t2 * 0.5 * (d[0] * ad[2] + d[2] * ad[0]);
-                    s.m[3] += t2 * d[1] * ad[1];
-                    s.m[4] += t2 * 0.5 * (d[1] * ad[2] + d[2] * ad[1]);
-                    s.m[5] += t2 * d[2] * ad[2];
-                }
-                v.setValue(fieldValue(s, constants));
-                ++mine;
-            }
-        }
-        evaluations += mine;
-    });
+    tbb::parallel_for(leaves.leafRange(1),
+                      [&](const openvdb::tree::LeafManager<openvdb::FloatTree>::LeafRange& range) {
+                          ctx.checkpoint();
+                          Scratch scratch(*kernels.centres);
+                          size_t n = 0;
+                          for (auto leaf = range.begin(); leaf; ++leaf)
+                              n += gather.leaf(*leaf, scratch);
+                          evaluations += n;
+                      });
     return evaluations;
 }
 

@@ -2,9 +2,11 @@
 // particles whose J comes from central differences of x-bar (not the gather's analytic sums);
 // spheres give SSP07's field; a jittered slab's top comes out flatter than SSP07's; the same
 // bytes on one thread; parameters checked.
+#include "field/AnisotropicField.h"
 #include "anisotropy/KernelShapes.h"
 #include "classify/Classify.h"
 #include "field/FieldMath.h"
+#include "field/GatherField.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshCheck.h>
@@ -225,4 +227,59 @@ TEST(AnisotropicField, SameBytesOnOneThreadAndParametersChecked)
     EXPECT_THROW(bad.validate(), ValueError);
     EXPECT_EQ(fieldFromName("ssp07-aniso"), FieldKind::Ssp07Aniso);
     EXPECT_STREQ(fieldName(FieldKind::Ssp07Aniso), "ssp07-aniso");
+}
+
+TEST(AnisotropicField, WideAndScalarSumsAndAnySubsetOfVoxelsGiveTheSameBits)
+{
+    // The device tests kernels voxel by voxel, the host per block of a leaf's active box: the
+    // bits must not depend on which kernels a test lets through (AnisotropicSums.h). Here the
+    // eight-lane sums against one voxel at a time, and a checkerboard of the band's voxels (other
+    // boxes, other lists) against the whole band.
+    SceneParams sp;
+    sp.radius = 0.025, sp.count = 4000, sp.layers = 2, sp.jitter = 0.3, sp.seed = 5;
+    const ParticleSet ps = generateScene(Scene::Sheet, sp);
+    Params p = anisoParams(sp.radius);
+    p.anisotropyRatio = 2.5, p.centreSmoothing = 0.3;
+    Context ctx;
+    const RasterizeResult band = rasterizeParticles(ps, p, ctx); // the pipeline's own values
+    const double cellSize = std::min(p.influenceRadius, p.smoothingLength);
+    const neighbors::CellIndex index =
+        neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), cellSize, ctx);
+    const classify::Classification classes = classify::classifyParticles(index, p, ctx);
+    const anisotropy::ShapeParams shapeParams = anisotropy::shapeParams(p);
+    const anisotropy::KernelShapes shapes =
+        anisotropy::kernelShapes(index, classes, shapeParams, ctx);
+    const anisotropy::KernelParticles kp =
+        anisotropy::kernelParticles(index, classes, shapes, p.keepIsolated, p.influenceRadius, ctx);
+    const field::AnisotropicKernels kernels = field::anisotropicKernels(
+        kp.centres, kp.shapes.data(), anisotropy::maxReach(shapeParams) * p.influenceRadius, p);
+    const Level level = p.level();
+    auto evaluate = [&](bool wide, bool checkerboard) {
+        auto tree =
+            std::make_shared<openvdb::FloatTree>(band.grid->tree(), 0.f, openvdb::TopologyCopy());
+        if (checkerboard)
+            for (auto v = tree->beginValueOn(); v; ++v) {
+                const openvdb::Coord c = v.getCoord();
+                if ((c.x() + c.y() + c.z()) & 1) v.setValueOff();
+            }
+        field::detail::evaluateAnisotropicField(*tree, kernels, p, level, ctx, wide);
+        return tree;
+    };
+    const auto scalar = evaluate(false, false), half = evaluate(false, true);
+    std::vector<std::shared_ptr<openvdb::FloatTree>> others{half};
+    if (field::fieldLanes() == 8) others.push_back(evaluate(true, true));
+    const auto reference = band.grid->getConstAccessor();
+    size_t differ = 0, checked = 0;
+    for (auto v = scalar->cbeginValueOn(); v; ++v, ++checked)
+        differ += *v != reference.getValue(v.getCoord());
+    EXPECT_GT(checked, 10000u);
+    EXPECT_EQ(differ, 0u) << "one voxel at a time against the pipeline's (eight a register where "
+                             "the CPU has AVX2)";
+    for (const auto& tree : others) {
+        size_t mismatched = 0, n = 0;
+        for (auto v = tree->cbeginValueOn(); v; ++v, ++n)
+            mismatched += *v != reference.getValue(v.getCoord());
+        EXPECT_GT(n, checked / 3);
+        EXPECT_EQ(mismatched, 0u) << "a checkerboard of the band";
+    }
 }

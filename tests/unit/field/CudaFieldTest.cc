@@ -183,6 +183,50 @@ TEST(FieldCuda, TheWholeReconstructionMakesTheCpusMesh)
     expectSameReconstruction(drop, p, "drop_zb05");
 }
 
+TEST(FieldCuda, TheAnisotropicFieldIsTheCpusToTheBit)
+{
+    // ssp07-aniso: classes, band and kernel shapes on the CPU, the gather on the device, which
+    // tests kernels voxel by voxel where the CPU tests 2 x 2 x 2 blocks (AnisotropicSums.h: the
+    // same bits either way, on 8 lanes or one voxel at a time).
+    FLUIDSURF_REQUIRE_GPU();
+    SceneParams sp;
+    sp.count = 20000, sp.jitter = 0.3, sp.layers = 2;
+    for (Scene scene : {Scene::Sheet, Scene::Jet, Scene::Slab, Scene::Drop}) {
+        const ParticleSet ps = generateScene(scene, sp);
+        const std::string name = std::string(sceneName(scene)) + "_aniso";
+        Params p = Params::fromRadius(sp.radius);
+        p.field = FieldKind::Ssp07Aniso;
+        expectSameField(ps, p, name, false);
+        Params stretched = p;
+        stretched.anisotropyRatio = 2.5, stretched.centreSmoothing = 0.3;
+        expectSameField(ps, stretched, name + "_stretched", false);
+        Params fine = p;
+        fine.voxelSize = 0.5 * sp.radius;
+        expectSameField(ps, fine, name + "_voxel0.5", false);
+    }
+    ParticleSet ps = generateScene(Scene::Drop, sp);
+    Attribute pscale;
+    pscale.name = "pscale";
+    pscale.floats.resize(ps.size());
+    for (size_t i = 0; i < ps.size(); ++i)
+        pscale.floats[i] = float(sp.radius * (0.8 + 0.4 * double(i % 7) / 6));
+    ps.attributes.push_back(pscale);
+    Params p = Params::fromRadius(sp.radius);
+    p.field = FieldKind::Ssp07Aniso, p.keepIsolated = true;
+    expectSameField(ps, p, "drop_pscale_keep_isolated_aniso", false);
+    FLUIDSURF_REQUIRE_SHARED_DATA();
+    for (const test::RealFrame& f : test::kRealFrames) {
+        Params q = Params::fromRadius(f.radius);
+        q.field = FieldKind::Ssp07Aniso;
+        const ParticleSet frame = io::readParticles(test::sharedData() + "/real/" + f.name);
+        expectSameField(frame, q, std::string(f.name) + "_aniso", false);
+        if (field::fieldLanes() != 8) continue; // (the post-processing's own sums)
+        ReconstructParams rp = ReconstructParams::fromRadius(f.radius);
+        rp.field.field = FieldKind::Ssp07Aniso, rp.post.smooth = 20;
+        expectSameReconstruction(frame, rp, std::string(f.name) + "_aniso_smooth20");
+    }
+}
+
 TEST(FieldCuda, ASupportOfManyVoxelsGoesToTheCpu)
 {
     // R = 4r at voxel r / 30: 134 voxels of reach, 276 slabs a leaf axis; the device gather's bin

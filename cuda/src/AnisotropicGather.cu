@@ -1,0 +1,295 @@
+// AnisotropicGather.cu - the ssp07-aniso field on the GPU (facade/FieldGather.h), one block per
+// VDB leaf, with the CPU's bits (lib/src/field/AnisotropicField.h): each voxel adds its kernels
+// one after another in the cell index's order, with AnisotropicSums.h's operations (this file is
+// built with --fmad=false: nothing else is fused), and FieldMath's fieldValue finishes. The CPU
+// tests kernels per block of voxels, this file per voxel; a kernel that does not reach a voxel
+// adds exact zeros on the CPU and is left out here, so both sum the same terms in the same order.
+#include "facade/FieldGather.h"
+
+#include "LeafCells.cuh"
+#include "Stages.cuh"
+
+#include "field/AnisotropicSums.h"
+
+namespace fluidsurf {
+namespace cuda {
+
+namespace {
+
+constexpr int kThreads = kLeafThreads; // a thread a voxel, a round for each 256 active voxels
+constexpr int kTile = 256;             // kernels staged in shared memory at a time
+
+struct Params
+{
+    DeviceCells cells;   ///< the kernels' centres (and radii) in cell order
+    const float* a;      ///< 6 a kernel: A' = R^2 G^2
+    const float* extent; ///< 3 a kernel: the box's half extents
+    double reach, dx;
+    const int32_t* leafOrigins;
+    const unsigned long long* leafActive;
+    float invR2;
+    field::FieldConstants constants;
+    float* out;
+    const unsigned long long* offsets; ///< per leaf of the batch: where its kernels go
+    float4* kernels;                   ///< 3 a kernel: (c, r), (a0..a3), (a4, a5, 0, 0)
+    uint32_t* counts;                  ///< countKernel: kernels per leaf
+    size_t leafBase;
+};
+
+/// The leaf's origin and its active voxels' box in world units (AnisotropicField.cc: the same
+/// doubles); false when none is active.
+__device__ bool activeBox(const Params& p, size_t leaf, double o[3], double lo[3], double hi[3])
+{
+    const unsigned long long* words = p.leafActive + 8 * leaf;
+    int first[3] = {8, 8, 8}, last[3] = {-1, -1, -1};
+    unsigned long long yz = 0;
+    for (int x = 0; x < 8; ++x)
+        if (words[x]) {
+            first[0] = min(first[0], x), last[0] = x;
+            yz |= words[x];
+        }
+    if (last[0] < 0) return false;
+    unsigned z = 0;
+    for (int y = 0; y < 8; ++y)
+        if (const unsigned row = unsigned(yz >> (8 * y)) & 0xffu) {
+            first[1] = min(first[1], y), last[1] = y;
+            z |= row;
+        }
+    first[2] = __ffs(z) - 1, last[2] = 31 - __clz(z);
+    for (int a = 0; a < 3; ++a) {
+        o[a] = p.leafOrigins[3 * leaf + a] * p.dx;
+        lo[a] = o[a] + first[a] * p.dx, hi[a] = o[a] + last[a] * p.dx;
+    }
+    return true;
+}
+
+/// Whether kernel i's box overlaps [lo, hi] (the CPU's test, float sums against doubles).
+__device__ bool overlaps(const Params& p, uint32_t i, const double lo[3], const double hi[3])
+{
+    const float3 c = p.cells.positions[i];
+    const float x[3] = {c.x, c.y, c.z};
+    bool in = true;
+    for (int a = 0; a < 3; ++a) {
+        const float e = p.extent[3 * size_t(i) + a];
+        in &= double(__fadd_rn(x[a], e)) >= lo[a] && double(__fsub_rn(x[a], e)) <= hi[a];
+    }
+    return in;
+}
+
+struct Shared
+{
+    uint32_t cellBegin[kCellChunk], cellPrefix[kCellChunk + 1];
+    int warpFound[kThreads / 32];
+    uint32_t cellsInChunk;
+    uint32_t total;
+    int activeCount;
+    unsigned short active[512];
+    float4 tile[3][kTile];
+};
+
+/// The walk over the leaf's cells (its active box and the longest kernel's reach) calling
+/// visit(kernel) for each kernel whose box overlaps the active box, in cell order.
+template <typename Visit>
+__device__ void forEachKernel(const Params& p, Shared& sh, size_t leaf, double o[3], Visit&& visit)
+{
+    double lo[3], hi[3];
+    if (!activeBox(p, leaf, o, lo, hi)) return;
+    double cellLo[3], cellHi[3]; // relative to o, for forEachCellChunk
+    for (int a = 0; a < 3; ++a)
+        cellLo[a] = lo[a] - p.reach - o[a], cellHi[a] = hi[a] + p.reach - o[a];
+    forEachCellChunk(p.cells, o, cellLo, cellHi, sh.cellBegin, sh.cellPrefix, sh.warpFound,
+                     sh.cellsInChunk,
+                     [&](const uint32_t* begin, const uint32_t* prefix, int cells) {
+                         const uint32_t n = prefix[cells];
+                         for (uint32_t tile = 0; tile < n; tile += kThreads) {
+                             const uint32_t f = tile + threadIdx.x;
+                             uint32_t i = 0;
+                             bool in = false;
+                             if (f < n) {
+                                 i = particleAt(begin, prefix, cells, f);
+                                 in = overlaps(p, i, lo, hi);
+                             }
+                             visit(i, in);
+                         }
+                     });
+}
+
+__global__ void __launch_bounds__(kThreads) countKernel(Params p)
+{
+    __shared__ Shared sh;
+    const size_t leaf = p.leafBase + blockIdx.x;
+    if (threadIdx.x == 0) sh.total = 0;
+    __syncthreads();
+    double o[3] = {0, 0, 0};
+    forEachKernel(p, sh, leaf, o, [&](uint32_t, bool in) {
+        const unsigned found = __ballot_sync(0xffffffffu, in);
+        if ((threadIdx.x & 31) == 0) atomicAdd(&sh.total, unsigned(__popc(found)));
+    });
+    __syncthreads();
+    if (threadIdx.x == 0) p.counts[blockIdx.x] = sh.total;
+}
+
+/// addKernel's operations on the device: the same roundings as the host's fmaf and AVX2 FMA.
+struct DeviceOps
+{
+    __device__ static float fma(float a, float b, float c) { return __fmaf_rn(a, b, c); }
+    __device__ static float fnma(float a, float b, float c) { return __fmaf_rn(-a, b, c); }
+    __device__ static float one() { return 1.f; }
+    __device__ static float cut(float t) { return t > 1e-6f ? t : 0.f; }
+    __device__ static bool none(float t) { return t == 0.f; }
+};
+
+template <bool Radii>
+__device__ void sumTile(field::AnisotropicAccumulator<float>& s, const Shared& sh, int n, float vx,
+                        float vy, float vz, float invR2)
+{
+    for (int k = 0; k < n; ++k) {
+        const float4 c = sh.tile[0][k], a0 = sh.tile[1][k], a1 = sh.tile[2][k];
+        const float centre[3] = {c.x, c.y, c.z};
+        const float a[6] = {a0.x, a0.y, a0.z, a0.w, a1.x, a1.y};
+        field::addKernel<DeviceOps, Radii>(s, centre, a, c.w, vx, vy, vz, invR2);
+    }
+}
+
+/// One leaf: its kernels gathered in cell order, then each active voxel summed by one thread.
+__global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
+{
+    __shared__ Shared sh;
+    const size_t leaf = p.leafBase + blockIdx.x;
+    float4* kernels = p.kernels + 3 * p.offsets[blockIdx.x];
+    if (threadIdx.x == 0) sh.total = 0, sh.activeCount = 0;
+    __syncthreads();
+    double o[3] = {0, 0, 0};
+    forEachKernel(p, sh, leaf, o, [&](uint32_t i, bool in) {
+        const uint32_t at = keptSlot(in, sh.warpFound, sh.total);
+        if (!in) return;
+        const float3 c = p.cells.positions[i];
+        const float* a = p.a + 6 * size_t(i);
+        kernels[3 * at] =
+            make_float4(float(double(c.x) - o[0]), float(double(c.y) - o[1]),
+                        float(double(c.z) - o[2]), p.cells.radii ? p.cells.radii[i] : 0.f);
+        kernels[3 * at + 1] = make_float4(a[0], a[1], a[2], a[3]);
+        kernels[3 * at + 2] = make_float4(a[4], a[5], 0.f, 0.f);
+    });
+    for (int v = threadIdx.x; v < 512; v += kThreads) {
+        const bool on = (p.leafActive[8 * leaf + (v >> 6)] >> (v & 63)) & 1ull;
+        if (on)
+            sh.active[atomicAdd(&sh.activeCount, 1)] = (unsigned short)(v);
+        else
+            p.out[leaf * 512 + v] = p.constants.background;
+    }
+    __syncthreads();
+    const uint32_t total = sh.total;
+    const bool radii = p.cells.radii != nullptr;
+    for (int round = 0; round * kThreads < sh.activeCount; ++round) { // (block-uniform)
+        const int slot = round * kThreads + threadIdx.x;
+        const bool mine = slot < sh.activeCount;
+        const int v = mine ? sh.active[slot] : 0;
+        const float vx = float((v >> 6) * p.dx), vy = float(((v >> 3) & 7) * p.dx),
+                    vz = float((v & 7) * p.dx);
+        field::AnisotropicAccumulator<float> s;
+        for (uint32_t t0 = 0; t0 < total; t0 += kTile) {
+            const int n = int(min(uint32_t(kTile), total - t0));
+            __syncthreads();
+            for (int k = threadIdx.x; k < n; k += kThreads)
+                for (int q = 0; q < 3; ++q)
+                    sh.tile[q][k] = kernels[3 * (t0 + k) + q];
+            __syncthreads();
+            if (!mine) continue;
+            if (radii)
+                sumTile<true>(s, sh, n, vx, vy, vz, p.invR2);
+            else
+                sumTile<false>(s, sh, n, vx, vy, vz, p.invR2);
+        }
+        if (mine)
+            p.out[leaf * 512 + v] =
+                field::fieldValue(field::toSums(s.w, s.d0, s.d1, s.d2, s.r, s.g0, s.g1, s.g2, s.m0,
+                                                s.m1, s.m2, s.m3, s.m4, s.m5),
+                                  p.constants);
+    }
+}
+
+/// Gathered kernels a batch of leaves may hold at once (48 bytes each: 48 MiB).
+constexpr unsigned long long kBatchKernels = 1ull << 20;
+
+} // namespace
+
+std::vector<float> gatherAnisotropicField(const AnisotropicInput& in, GatherTimes* times,
+                                          void* streamPtr)
+{
+    const GatherInput& g = in.gather;
+    std::vector<float> out(g.leafCount * 512, g.field.background);
+    if (g.leafCount == 0) return out;
+    if (!(g.cellSize > 0 && g.field.voxelSize > 0 && g.field.influenceRadius > 0 && in.reach > 0))
+        throw Error("gatherAnisotropicField: invalid sizes");
+    if (g.tableSize == 0 || (g.tableSize & (g.tableSize - 1)))
+        throw Error("gatherAnisotropicField: the cell hash table size must be a power of two");
+    const Stream ownStream(streamPtr);
+    const cudaStream_t stream = ownStream.get();
+    DeviceMemory mem(stream);
+    StageEvents events(stream);
+    Params p{};
+    p.cells.count = g.particleCount;
+    p.cells.positions = mem.upload(reinterpret_cast<const float3*>(g.positions), g.particleCount);
+    p.cells.radii = g.radii ? mem.upload(g.radii, g.particleCount) : nullptr;
+    p.cells.starts = mem.upload(g.cellStarts, g.cellCount + 1);
+    p.cells.tableKeys =
+        mem.upload(reinterpret_cast<const unsigned long long*>(g.tableKeys), g.tableSize);
+    p.cells.tableCells = mem.upload(g.tableCells, g.tableSize);
+    p.cells.tableMask = g.tableSize - 1;
+    p.cells.cellCount = g.cellCount;
+    p.cells.cellSize = g.cellSize;
+    for (int a = 0; a < 3; ++a)
+        p.cells.origin[a] = g.cellOrigin[a], p.cells.dims[a] = int(g.cellDims[a]);
+    p.a = mem.upload(in.a, 6 * g.particleCount);
+    p.extent = mem.upload(in.extent, 3 * g.particleCount);
+    p.reach = in.reach, p.dx = g.field.voxelSize;
+    p.leafOrigins = mem.upload(g.leafOrigins, 3 * g.leafCount);
+    p.leafActive =
+        mem.upload(reinterpret_cast<const unsigned long long*>(g.leafActive), 8 * g.leafCount);
+    const double R = g.field.influenceRadius;
+    p.invR2 = float(1 / (R * R));
+    p.constants = fieldConstants(g.field, g.radii != nullptr);
+    p.out = mem.alloc<float>(out.size());
+    events.mark("upload");
+
+    // How many kernels each leaf gathers, then the leaves in batches whose scratch fits.
+    p.counts = mem.alloc<uint32_t>(g.leafCount);
+    p.leafBase = 0;
+    countKernel<<<unsigned(g.leafCount), kThreads, 0, stream>>>(p);
+    FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+    std::vector<uint32_t> counts(g.leafCount);
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(counts.data(), p.counts, g.leafCount * sizeof(uint32_t),
+                                         cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    std::vector<unsigned long long> offsets;
+    for (size_t begin = 0, end = 0; begin < g.leafCount; begin = end) {
+        offsets.clear();
+        unsigned long long total = 0;
+        for (end = begin;
+             end < g.leafCount && (end == begin || total + counts[end] <= kBatchKernels); ++end)
+            offsets.push_back(total), total += counts[end];
+        p.leafBase = begin;
+        p.offsets = mem.upload(offsets.data(), offsets.size());
+        p.kernels = mem.alloc<float4>(3 * total + 1);
+        fieldKernel<<<unsigned(end - begin), kThreads, 0, stream>>>(p);
+        FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+        mem.release(p.offsets), mem.release(p.kernels);
+    }
+    events.mark("gather kernel");
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), p.out, out.size() * sizeof(float),
+                                         cudaMemcpyDeviceToHost, stream));
+    events.mark("download");
+    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    if (times) {
+        const auto stages = events.stages();
+        times->uploadMs = stages[0].second;
+        times->kernelMs = stages[1].second;
+        times->downloadMs = stages[2].second;
+        times->deviceBytes = mem.peakBytes();
+    }
+    return out;
+}
+
+} // namespace cuda
+} // namespace fluidsurf
