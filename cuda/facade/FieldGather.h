@@ -14,6 +14,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace fluidsurf {
@@ -69,16 +70,32 @@ std::vector<float> gatherField(const GatherInput& input, GatherTimes* times = nu
 /// centres in cell order (gather.radii their radii or null), and per kernel in that order
 struct AnisotropicInput
 {
-    GatherInput gather;
+    GatherInput gather;            ///< (its leaves are evaluate()'s)
     const float* a = nullptr;      ///< 6 a kernel: A' = R^2 G^2 (xx, xy, xz, yy, yz, zz)
     const float* extent = nullptr; ///< 3 a kernel: its box's half extents, world units
     double reach = 0;              ///< the most any kernel reaches, world units
 };
 
-/// phi for the 512 voxels of every leaf of in.gather, as gatherField returns them, with the CPU's
-/// bits (AnisotropicGather.cu). Throws fluidsurf::Error on CUDA errors.
-std::vector<float> gatherAnisotropicField(const AnisotropicInput& in, GatherTimes* times = nullptr,
-                                          void* stream = nullptr);
+/// The ssp07-aniso gather on the device (AnisotropicGather.cu): the kernels uploaded once, then
+/// phi for the leaves of each evaluate() (the band, then each round of its completion), as
+/// gatherField returns them, with the CPU's bits. Throws fluidsurf::Error on CUDA errors.
+class AnisotropicGather
+{
+public:
+    explicit AnisotropicGather(const AnisotropicInput& in);
+    ~AnisotropicGather();
+    AnisotropicGather(const AnisotropicGather&) = delete;
+    AnisotropicGather& operator=(const AnisotropicGather&) = delete;
+
+    /// 512 values per leaf (inactive voxels: the background); times: this call's, the kernels'
+    /// upload counted in the first.
+    std::vector<float> evaluate(const int32_t* leafOrigins, const uint64_t* leafActive,
+                                size_t leafCount, GatherTimes* times = nullptr);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> mImpl;
+};
 
 } // namespace cuda
 } // namespace fluidsurf

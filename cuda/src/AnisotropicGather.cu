@@ -214,21 +214,27 @@ constexpr unsigned long long kBatchKernels = 1ull << 20;
 
 } // namespace
 
-std::vector<float> gatherAnisotropicField(const AnisotropicInput& in, GatherTimes* times,
-                                          void* streamPtr)
+struct AnisotropicGather::Impl
+{
+    Impl() : stream(nullptr), mem(stream.get()) {}
+    Stream stream;
+    DeviceMemory mem;
+    Params p{};
+    float background = 0;
+    double kernelUploadMs = 0; ///< counted in the first evaluate()'s upload
+};
+
+AnisotropicGather::AnisotropicGather(const AnisotropicInput& in)
 {
     const GatherInput& g = in.gather;
-    std::vector<float> out(g.leafCount * 512, g.field.background);
-    if (g.leafCount == 0) return out;
     if (!(g.cellSize > 0 && g.field.voxelSize > 0 && g.field.influenceRadius > 0 && in.reach > 0))
-        throw Error("gatherAnisotropicField: invalid sizes");
+        throw Error("AnisotropicGather: invalid sizes");
     if (g.tableSize == 0 || (g.tableSize & (g.tableSize - 1)))
-        throw Error("gatherAnisotropicField: the cell hash table size must be a power of two");
-    const Stream ownStream(streamPtr);
-    const cudaStream_t stream = ownStream.get();
-    DeviceMemory mem(stream);
-    StageEvents events(stream);
-    Params p{};
+        throw Error("AnisotropicGather: the cell hash table size must be a power of two");
+    mImpl = std::make_unique<Impl>();
+    DeviceMemory& mem = mImpl->mem;
+    StageEvents events(mImpl->stream.get());
+    Params& p = mImpl->p;
     p.cells.count = g.particleCount;
     p.cells.positions = mem.upload(reinterpret_cast<const float3*>(g.positions), g.particleCount);
     p.cells.radii = g.radii ? mem.upload(g.radii, g.particleCount) : nullptr;
@@ -244,30 +250,47 @@ std::vector<float> gatherAnisotropicField(const AnisotropicInput& in, GatherTime
     p.a = mem.upload(in.a, 6 * g.particleCount);
     p.extent = mem.upload(in.extent, 3 * g.particleCount);
     p.reach = in.reach, p.dx = g.field.voxelSize;
-    p.leafOrigins = mem.upload(g.leafOrigins, 3 * g.leafCount);
-    p.leafActive =
-        mem.upload(reinterpret_cast<const unsigned long long*>(g.leafActive), 8 * g.leafCount);
     const double R = g.field.influenceRadius;
     p.invR2 = float(1 / (R * R));
     p.constants = fieldConstants(g.field, g.radii != nullptr);
+    mImpl->background = g.field.background;
+    events.mark("kernels");
+    mImpl->kernelUploadMs = events.stages()[0].second;
+}
+
+AnisotropicGather::~AnisotropicGather() = default;
+
+std::vector<float> AnisotropicGather::evaluate(const int32_t* leafOrigins,
+                                               const uint64_t* leafActive, size_t leafCount,
+                                               GatherTimes* times)
+{
+    std::vector<float> out(leafCount * 512, mImpl->background);
+    if (leafCount == 0) return out;
+    const cudaStream_t stream = mImpl->stream.get();
+    DeviceMemory& mem = mImpl->mem;
+    StageEvents events(stream);
+    Params p = mImpl->p;
+    p.leafOrigins = mem.upload(leafOrigins, 3 * leafCount);
+    p.leafActive =
+        mem.upload(reinterpret_cast<const unsigned long long*>(leafActive), 8 * leafCount);
     p.out = mem.alloc<float>(out.size());
     events.mark("upload");
 
     // How many kernels each leaf gathers, then the leaves in batches whose scratch fits.
-    p.counts = mem.alloc<uint32_t>(g.leafCount);
+    p.counts = mem.alloc<uint32_t>(leafCount);
     p.leafBase = 0;
-    countKernel<<<unsigned(g.leafCount), kThreads, 0, stream>>>(p);
+    countKernel<<<unsigned(leafCount), kThreads, 0, stream>>>(p);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    std::vector<uint32_t> counts(g.leafCount);
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(counts.data(), p.counts, g.leafCount * sizeof(uint32_t),
+    std::vector<uint32_t> counts(leafCount);
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(counts.data(), p.counts, leafCount * sizeof(uint32_t),
                                          cudaMemcpyDeviceToHost, stream));
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
     std::vector<unsigned long long> offsets;
-    for (size_t begin = 0, end = 0; begin < g.leafCount; begin = end) {
+    for (size_t begin = 0, end = 0; begin < leafCount; begin = end) {
         offsets.clear();
         unsigned long long total = 0;
-        for (end = begin;
-             end < g.leafCount && (end == begin || total + counts[end] <= kBatchKernels); ++end)
+        for (end = begin; end < leafCount && (end == begin || total + counts[end] <= kBatchKernels);
+             ++end)
             offsets.push_back(total), total += counts[end];
         p.leafBase = begin;
         p.offsets = mem.upload(offsets.data(), offsets.size());
@@ -281,13 +304,17 @@ std::vector<float> gatherAnisotropicField(const AnisotropicInput& in, GatherTime
                                          cudaMemcpyDeviceToHost, stream));
     events.mark("download");
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    for (const void* scratch : {(const void*)p.leafOrigins, (const void*)p.leafActive,
+                                (const void*)p.out, (const void*)p.counts})
+        mem.release(scratch);
     if (times) {
         const auto stages = events.stages();
-        times->uploadMs = stages[0].second;
+        times->uploadMs = stages[0].second + mImpl->kernelUploadMs;
         times->kernelMs = stages[1].second;
         times->downloadMs = stages[2].second;
         times->deviceBytes = mem.peakBytes();
     }
+    mImpl->kernelUploadMs = 0;
     return out;
 }
 

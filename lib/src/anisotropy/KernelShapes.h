@@ -82,5 +82,11 @@ KernelParticles kernelParticles(const neighbors::CellIndex& index,
                                 const classify::Classification& classes, const KernelShapes& shapes,
                                 bool keepIsolated, double cellSize, Context& ctx);
 
+/// kernelParticles where every centre is its particle's position (lambda = 0): the index itself,
+/// moved in, less its isolated particles unless kept (in place, in order: no second index).
+KernelParticles kernelParticles(neighbors::CellIndex&& index,
+                                const classify::Classification& classes, const KernelShapes& shapes,
+                                bool keepIsolated);
+
 } // namespace anisotropy
 } // namespace fluidsurf

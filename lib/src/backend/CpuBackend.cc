@@ -65,7 +65,7 @@ void narrowBandOnCpu(const Classified& c, const Params& params, const Level& lev
                                                     openvdb::TopologyCopy());
 }
 
-std::unique_ptr<AnisotropicStage> anisotropicStage(const Classified& c, const Params& params,
+std::unique_ptr<AnisotropicStage> anisotropicStage(Classified&& c, const Params& params,
                                                    Context& ctx)
 {
     const auto t = ctx.scope("kernel shapes");
@@ -74,12 +74,20 @@ std::unique_ptr<AnisotropicStage> anisotropicStage(const Classified& c, const Pa
     {
         const anisotropy::KernelShapes shapes =
             anisotropy::kernelShapes(c.index, c.classes, sp, ctx);
-        stage->kernels = anisotropy::kernelParticles(
-            c.index, c.classes, shapes, params.keepIsolated, params.influenceRadius, ctx);
+        if (sp.centreSmoothing == 0) { // the centres are the particles: their index serves
+            const classify::Classification classes = std::move(c.classes);
+            stage->kernels = anisotropy::kernelParticles(std::move(c.index), classes, shapes,
+                                                         params.keepIsolated);
+        } else {
+            stage->kernels = anisotropy::kernelParticles(
+                c.index, c.classes, shapes, params.keepIsolated, params.influenceRadius, ctx);
+        }
+        c = Classified();
     }
     stage->table =
         field::anisotropicKernels(stage->kernels.centres, stage->kernels.shapes.data(),
                                   anisotropy::maxReach(sp) * params.influenceRadius, params);
+    stage->kernels.shapes = {}; // (the table holds what the gather needs)
     return stage;
 }
 
@@ -97,7 +105,7 @@ public:
         Classified c = classifyOnCpu(particles, params, ctx, out);
         narrowBandOnCpu(c, params, level, width, ctx, out);
         if (params.field == FieldKind::Ssp07Aniso) {
-            mAniso = anisotropicStage(c, params, ctx);
+            mAniso = anisotropicStage(std::move(c), params, ctx);
             const auto t = ctx.scope("field");
             mParticles = nullptr;
             out.evaluations = evaluate(*out.tree, params, level, ctx);

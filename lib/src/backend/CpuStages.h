@@ -43,7 +43,8 @@ struct AnisotropicStage
     anisotropy::KernelParticles kernels;
     field::AnisotropicKernels table;
 };
-std::unique_ptr<AnisotropicStage> anisotropicStage(const Classified& c, const Params& params,
+/// c is left empty: with lambda = 0 its index becomes the kernels' (fieldParticles).
+std::unique_ptr<AnisotropicStage> anisotropicStage(Classified&& c, const Params& params,
                                                    Context& ctx);
 
 } // namespace backend

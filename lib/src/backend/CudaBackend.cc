@@ -189,13 +189,14 @@ public:
             // are issue 65's), the field on the device.
             Classified c = classifyOnCpu(particles, params, ctx, out);
             narrowBandOnCpu(c, params, level, width, ctx, out);
-            mAniso = anisotropicStage(c, params, ctx);
+            mAnisoGather.reset();
+            mAniso = anisotropicStage(std::move(c), params, ctx);
             mPipeline.reset(), mIndex = nullptr, mCpuField = false;
             const auto t = ctx.scope("field");
             out.evaluations = evaluate(*out.tree, params, level, ctx);
             return true;
         }
-        mAniso.reset();
+        mAniso.reset(), mAnisoGather.reset();
         const std::vector<Vec3f>& positions = particles.positions;
         const std::vector<float>& radii = particles.radii;
         if (positions.empty()) { // nothing for the device to do
@@ -273,25 +274,34 @@ public:
     void useParticles(const neighbors::CellIndex& particles) override
     {
         mIndex = &particles;
-        mPipeline.reset(), mAniso.reset();
+        mPipeline.reset(), mAniso.reset(), mAnisoGather.reset();
     }
 
     /// The ssp07-aniso field of tree's active voxels on the device, from the kernels narrowBand
-    /// made (uploaded on each call: the band's completion calls a few times).
+    /// made (uploaded on the first call, kept for the band's completion).
     size_t evaluateAnisotropic(openvdb::FloatTree& tree, const Params& params, const Level& level)
     {
         if (!mAniso) throw Error("CUDA backend: evaluate() before the kernels were made");
-        const neighbors::CellIndex& centres = mAniso->kernels.centres;
-        const field::AnisotropicKernels& table = mAniso->table;
+        const bool first = !mAnisoGather; // (the band; then its completion's rounds add up)
         cuda::GatherTimes times;
         const size_t evaluations =
             fillActiveVoxels(tree, [&](const int32_t* origins, const uint64_t* masks, size_t n) {
-                cuda::AnisotropicInput in;
-                in.gather = gatherInput(centres, origins, masks, n, params, level);
-                in.a = table.a.data(), in.extent = table.extent.data(), in.reach = table.reach;
-                return cuda::gatherAnisotropicField(in, &times);
+                if (!mAnisoGather) {
+                    const field::AnisotropicKernels& table = mAniso->table;
+                    cuda::AnisotropicInput in;
+                    in.gather =
+                        gatherInput(mAniso->kernels.centres, nullptr, nullptr, 0, params, level);
+                    in.a = table.a.data(), in.extent = table.extent.data();
+                    in.reach = table.reach;
+                    mAnisoGather = std::make_unique<cuda::AnisotropicGather>(in);
+                }
+                return mAnisoGather->evaluate(origins, masks, n, &times);
             });
+        const std::vector<StageTime> before = mGatherStages;
         noteGather(times);
+        if (!first && before.size() == mGatherStages.size())
+            for (size_t k = 0; k < before.size(); ++k)
+                mGatherStages[k].seconds += before[k].seconds;
         return evaluations;
     }
 
@@ -410,7 +420,8 @@ private:
     std::string mName;
     std::unique_ptr<cuda::NarrowBandPipeline> mPipeline; // holds the particles on the device
     const neighbors::CellIndex* mIndex = nullptr;
-    std::unique_ptr<AnisotropicStage> mAniso; ///< ssp07-aniso: the kernels (CPU-made)
+    std::unique_ptr<AnisotropicStage> mAniso;              ///< ssp07-aniso: the kernels (CPU-made)
+    std::unique_ptr<cuda::AnisotropicGather> mAnisoGather; ///< and on the device
     std::vector<StageTime> mGatherStages;
     size_t mGatherBytes = 0;
     bool mCpuField = false; ///< evaluate() ran the CPU's gather (see kSupportTooWide)

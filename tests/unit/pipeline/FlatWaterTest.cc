@@ -1,0 +1,103 @@
+// Flat water (issue 64): ssp07-aniso with 20 rounds of smoothing, the combination that is
+// flatter than splashsurf 0.14 (BENCHMARKS.md), on every real fluid frame: closed and manifold,
+// no more components than the raw SSP07 mesh (no new blobs). Its distance to that mesh and the
+// particles it leaves outside (ray parity, MeshInside.h) are recorded, not held to the issue's
+// 1 r and 99.9%: it misses both (1.7-2.2 r on four frames, where the kernels stretched along
+// the surface carry it past rims; up to 2.9% of the centres outside, where 0.15-0.7% already lie
+// outside today's default), which is why it is not the default. Thin sheets and jets come out
+// whole (ThinFeaturesTest does the same for the default).
+#include "MeshInside.h"
+#include "TestData.h"
+
+#include <fluidsurf/MeshCheck.h>
+#include <fluidsurf/Reconstruct.h>
+#include <fluidsurf/Scenes.h>
+#include <fluidsurf/io/ParticleIO.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <string>
+
+namespace fluidsurf {
+namespace {
+
+ReconstructParams flatWater(double r)
+{
+    ReconstructParams p = ReconstructParams::fromRadius(r);
+    p.field.field = FieldKind::Ssp07Aniso;
+    p.post.smooth = 20;
+    return p;
+}
+
+ReconstructParams rawSsp07(double r)
+{
+    ReconstructParams p = ReconstructParams::fromRadius(r);
+    p.post.decimate = 0, p.post.smooth = 0, p.post.subdivide = 0;
+    return p;
+}
+
+} // namespace
+
+TEST(FlatWater, RealFramesAreClosedWithNoNewBlobs)
+{
+    FLUIDSURF_REQUIRE_SHARED_DATA();
+    for (const test::RealFrame& f : test::kRealFrames) {
+        if (!f.fluid) continue;
+        SCOPED_TRACE(f.name);
+        const ParticleSet ps = io::readParticles(test::sharedData() + "/real/" + f.name);
+        Context ctx;
+        const ReconstructResult flat = reconstruct(ps, flatWater(f.radius), ctx);
+        const ReconstructResult raw = reconstruct(ps, rawSsp07(f.radius), ctx);
+        const MeshReport report = checkMesh(flat.mesh), rawReport = checkMesh(raw.mesh);
+        EXPECT_TRUE(report.watertight()) << describe(report);
+        EXPECT_LE(report.components - flat.isolatedSpheres,
+                  rawReport.components - raw.isolatedSpheres);
+        const double distance = meshDistance(flat.mesh, raw.mesh, 4 * f.radius) / f.radius;
+        std::vector<uint32_t> isolated = flat.isolatedParticles;
+        std::sort(isolated.begin(), isolated.end());
+        std::vector<Vec3f> kept;
+        for (uint32_t i = 0; i < ps.size(); ++i)
+            if (!std::binary_search(isolated.begin(), isolated.end(), i))
+                kept.push_back(ps.positions[i]);
+        const std::vector<bool> inside = test::insideMesh(flat.mesh, kept);
+        const size_t in = size_t(std::count(inside.begin(), inside.end(), true));
+        ::testing::Test::RecordProperty(std::string(f.name) + "_distance_to_raw_ssp07_in_r",
+                                        std::to_string(distance));
+        ::testing::Test::RecordProperty(std::string(f.name) + "_centres_outside",
+                                        std::to_string(kept.size() - in));
+    }
+}
+
+TEST(FlatWater, SheetsAndJetsAreOneClosedComponentAroundTheirParticles)
+{
+    struct Case
+    {
+        Scene scene;
+        int layers;
+        double jitter;
+    };
+    const Case cases[] = {
+        {Scene::Sheet, 1, 0.2}, {Scene::Sheet, 2, 0.2}, {Scene::Jet, 1, 0.1}, {Scene::Jet, 2, 0.2}};
+    for (const Case& c : cases) {
+        SceneParams sp;
+        sp.count = 6000, sp.radius = 0.025, sp.layers = c.layers, sp.jitter = c.jitter;
+        const ParticleSet ps = generateScene(c.scene, sp);
+        SCOPED_TRACE(std::string(sceneName(c.scene)) + " of " + std::to_string(c.layers) +
+                     " layers");
+        Context ctx;
+        const ReconstructResult res = reconstruct(ps, flatWater(sp.radius), ctx);
+        const MeshReport report = checkMesh(res.mesh);
+        EXPECT_TRUE(report.watertight()) << describe(report);
+        EXPECT_EQ(res.isolatedParticles.size(), 0u);
+        EXPECT_EQ(report.components, 1u);
+        const std::vector<bool> inside = test::insideMesh(res.mesh, ps.positions);
+        TriangleMesh outside;
+        for (size_t i = 0; i < ps.size(); ++i)
+            if (!inside[i]) outside.points.push_back(ps.positions[i]);
+        EXPECT_LE(meshDistance(outside, res.mesh, sp.radius), 0.25 * sp.radius)
+            << outside.points.size() << " of " << ps.size() << " centres outside the surface";
+    }
+}
+
+} // namespace fluidsurf
