@@ -167,12 +167,18 @@ Row runOurs(const Case& c, const Params& p, Device device, int threads, int repe
     return row;
 }
 
+double stageOf(const Row& r, const char* name)
+{
+    const auto it = r.stages.find(name);
+    return it == r.stages.end() ? 0 : it->second;
+}
+
 void printRow(const Row& r, double reference)
 {
     std::string stages;
     for (const char* s :
-         {"neighbors", "classify", "narrow band", "bounding volume", "field", "cuda context",
-          "upload", "device field", "vdb build", "complete band", "level set"}) {
+         {"neighbors", "classify", "narrow band", "bounding volume", "kernel shapes", "field",
+          "cuda context", "upload", "device field", "vdb build", "complete band", "level set"}) {
         auto it = r.stages.find(s);
         if (it == r.stages.end()) continue;
         char buf[64];
@@ -203,7 +209,7 @@ int runFieldBench(const FieldBenchOptions& o)
                 "| active voxels | peak RSS MiB | time / narrow band "
                 "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     const std::vector<std::string> methods = split(o.methods);
-    std::vector<std::string> gpuNotes;
+    std::vector<std::string> gpuNotes, anisoNotes;
     for (const Case& c : loadCases(o.scenes, o.shared))
         for (const std::string& v : split(o.voxels))
             for (const std::string& s : split(o.supports)) {
@@ -211,12 +217,14 @@ int runFieldBench(const FieldBenchOptions& o)
                 p.voxelSize = std::stod(v) * c.radius;
                 p.influenceRadius = std::stod(s) * c.radius;
                 double reference = 0, cpuField = 0, cpuField1 = 0;
+                double ssp07Field = 0, ssp07DeviceField = 0; // their field stages, s
                 for (const std::string& m : methods) {
                     if (m == "narrow-band-cuda") {
                         p.method = FieldMethod::NarrowBand;
                         const Row r =
                             runOurs(c, p, Device::Cuda, hw, o.repeat, "narrow band, CUDA");
                         printRow(r, reference);
+                        ssp07DeviceField = stageOf(r, "device field");
                         std::string note = r.gpu;
                         if (r.gpuFieldMs > 0) {
                             char buf[200];
@@ -243,10 +251,34 @@ int runFieldBench(const FieldBenchOptions& o)
                         const Row r = runOurs(c, p, Device::Cpu, m == "narrow-band" ? hw : 1,
                                               o.repeat, "narrow band");
                         if (m == "narrow-band")
-                            reference = r.median, cpuField = r.cpuFieldSeconds();
+                            reference = r.median, cpuField = r.cpuFieldSeconds(),
+                            ssp07Field = stageOf(r, "field");
                         else
                             cpuField1 = r.cpuFieldSeconds();
                         printRow(r, reference);
+                    } else if (m == "aniso" || m == "aniso-cuda") {
+                        // ssp07-aniso (issue 64): its field stage against SSP07's in this run
+                        Params a = p;
+                        a.method = FieldMethod::NarrowBand, a.field = FieldKind::Ssp07Aniso;
+                        const bool cuda = m == "aniso-cuda";
+                        const Row r = runOurs(c, a, cuda ? Device::Cuda : Device::Cpu, hw, o.repeat,
+                                              cuda ? "ssp07-aniso, CUDA" : "ssp07-aniso");
+                        printRow(r, reference);
+                        const double base = cuda ? ssp07DeviceField : ssp07Field;
+                        char buf[320];
+                        std::snprintf(
+                            buf, sizeof(buf),
+                            "%s, %s: kernel shapes %.1f ms, field %.1f ms, complete band "
+                            "%.1f ms; field / SSP07's %s %s",
+                            c.name.c_str(), r.method.c_str(), stageOf(r, "kernel shapes") * 1e3,
+                            stageOf(r, "field") * 1e3, stageOf(r, "complete band") * 1e3,
+                            cuda ? "device field" : "field",
+                            base > 0
+                                ? (std::to_string(stageOf(r, "field") / base).substr(0, 4) + "x")
+                                      .c_str()
+                                : "(run narrow-band first)");
+                        anisoNotes.push_back(buf);
+                        if (cuda && !r.gpu.empty()) gpuNotes.push_back(r.gpu);
                     } else if (m == "gather-full" || m == "scatter") {
                         p.method = methodFromName(m);
                         printRow(runOurs(c, p, Device::Cpu, m == "scatter" ? 1 : hw,
@@ -281,6 +313,12 @@ int runFieldBench(const FieldBenchOptions& o)
                     }
                 }
             }
+    if (!anisoNotes.empty()) {
+        std::printf("\nssp07-aniso (medians; its field stage against SSP07's in the same run, "
+                    "CUDA against the device pipeline's whole field, sort to gather):\n\n");
+        for (const std::string& n : anisoNotes)
+            std::printf("- %s\n", n.c_str());
+    }
     if (!gpuNotes.empty()) {
         std::printf("\nGPU timings (CUDA events, medians of the runs; the field computation is "
                     "sort through gather,\n"

@@ -55,7 +55,8 @@ int main(int argc, char** argv)
     fieldCmd
         ->add_option("--methods", field.methods,
                      "narrow-band, narrow-band-1 (one thread), narrow-band-cuda, "
-                     "gather-full, scatter, p2ls, smooth")
+                     "gather-full, scatter, p2ls, smooth; aniso, aniso-cuda (ssp07-aniso, its "
+                     "field stage against narrow-band's or narrow-band-cuda's, listed before it)")
         ->capture_default_str();
     fluidsurf::bench::MeshBenchOptions mesh;
     CLI::App* meshCmd = app.add_subcommand(
