@@ -25,6 +25,8 @@ struct FieldSettings
 {
     double voxelSize = 0, influenceRadius = 0, radius = 0, tLow = 0.4, tHigh = 3.5;
     double radiusScale = 1; ///< Params::radiusScale
+    bool density = false;   ///< Params::field is Yt10 (AnisotropicInput::weight)
+    double isoLevel = 0.5;  ///< Params::isoLevel
     float background = 0;
     bool ssp07 = true;
 };
@@ -66,14 +68,16 @@ bool gatherFits(double voxelSize, double influenceRadius);
 std::vector<float> gatherField(const GatherInput& input, GatherTimes* times = nullptr,
                                void* stream = nullptr);
 
-/// The ssp07-aniso field's kernels (lib/src/field/AnisotropicField.h): gather.positions are their
-/// centres in cell order (gather.radii their radii or null), and per kernel in that order
+/// The ssp07-aniso and yt10 fields' kernels (lib/src/field/AnisotropicField.h): gather.positions
+/// are their centres in cell order (gather.radii their radii or null), and per kernel in that order
 struct AnisotropicInput
 {
     GatherInput gather;            ///< (its leaves are evaluate()'s)
     const float* a = nullptr;      ///< 6 a kernel: A' = R^2 G^2 (xx, xy, xz, yy, yz, zz)
     const float* extent = nullptr; ///< 3 a kernel: its box's half extents, world units
-    double reach = 0;              ///< the most any kernel reaches, world units
+    /// yt10 (field.density): 1 a kernel, V_j W's factor, summed where the radii would be
+    const float* weight = nullptr;
+    double reach = 0; ///< the most any kernel reaches, world units
 };
 
 /// The ssp07-aniso gather on the device (AnisotropicGather.cu): the kernels uploaded once, then

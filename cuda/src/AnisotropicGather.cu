@@ -1,8 +1,8 @@
-// AnisotropicGather.cu - the ssp07-aniso field on the GPU (facade/FieldGather.h), one block per
-// VDB leaf, with the CPU's bits (lib/src/field/AnisotropicField.h): each voxel adds its kernels
-// one after another in the cell index's order, with AnisotropicSums.h's operations (this file is
-// built with --fmad=false: nothing else is fused), and FieldMath's fieldValue finishes. The CPU
-// tests kernels per block of voxels, this file per voxel; a kernel that does not reach a voxel
+// AnisotropicGather.cu - the ssp07-aniso and yt10 fields on the GPU (facade/FieldGather.h), one
+// block per VDB leaf, with the CPU's bits (lib/src/field/AnisotropicField.h): each voxel adds its
+// kernels one after another in the cell index's order, with AnisotropicSums.h's operations (this
+// file is built with --fmad=false: nothing else is fused), and FieldMath's fieldValue finishes. The
+// CPU tests kernels per block of voxels, this file per voxel; a kernel that does not reach a voxel
 // adds exact zeros on the CPU and is left out here, so both sum the same terms in the same order.
 #include "facade/FieldGather.h"
 
@@ -24,6 +24,7 @@ struct Params
     DeviceCells cells;   ///< the kernels' centres (and radii) in cell order
     const float* a;      ///< 6 a kernel: A' = R^2 G^2
     const float* extent; ///< 3 a kernel: the box's half extents
+    const float* weight; ///< yt10: 1 a kernel, in the radius slot (else null)
     double reach, dx;
     const int32_t* leafOrigins;
     const unsigned long long* leafActive;
@@ -165,9 +166,11 @@ __global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
         if (!in) return;
         const float3 c = p.cells.positions[i];
         const float* a = p.a + 6 * size_t(i);
-        kernels[3 * at] =
-            make_float4(float(double(c.x) - o[0]), float(double(c.y) - o[1]),
-                        float(double(c.z) - o[2]), p.cells.radii ? p.cells.radii[i] : 0.f);
+        kernels[3 * at] = make_float4(float(double(c.x) - o[0]), float(double(c.y) - o[1]),
+                                      float(double(c.z) - o[2]),
+                                      p.weight        ? p.weight[i]
+                                      : p.cells.radii ? p.cells.radii[i]
+                                                      : 0.f);
         kernels[3 * at + 1] = make_float4(a[0], a[1], a[2], a[3]);
         kernels[3 * at + 2] = make_float4(a[4], a[5], 0.f, 0.f);
     });
@@ -180,7 +183,7 @@ __global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
     }
     __syncthreads();
     const uint32_t total = sh.total;
-    const bool radii = p.cells.radii != nullptr;
+    const bool radii = p.cells.radii != nullptr || p.weight != nullptr;
     for (int round = 0; round * kThreads < sh.activeCount; ++round) { // (block-uniform)
         const int slot = round * kThreads + threadIdx.x;
         const bool mine = slot < sh.activeCount;
@@ -249,10 +252,11 @@ AnisotropicGather::AnisotropicGather(const AnisotropicInput& in)
         p.cells.origin[a] = g.cellOrigin[a], p.cells.dims[a] = int(g.cellDims[a]);
     p.a = mem.upload(in.a, 6 * g.particleCount);
     p.extent = mem.upload(in.extent, 3 * g.particleCount);
+    p.weight = in.weight ? mem.upload(in.weight, g.particleCount) : nullptr;
     p.reach = in.reach, p.dx = g.field.voxelSize;
     const double R = g.field.influenceRadius;
     p.invR2 = float(1 / (R * R));
-    p.constants = fieldConstants(g.field, g.radii != nullptr);
+    p.constants = fieldConstants(g.field, g.radii != nullptr || in.weight != nullptr);
     mImpl->background = g.field.background;
     events.mark("kernels");
     mImpl->kernelUploadMs = events.stages()[0].second;

@@ -335,6 +335,7 @@ field::FieldConstants fieldConstants(const FieldSettings& s, bool perParticleRad
     c.radiusScale = s.radiusScale;
     c.perParticleRadii = perParticleRadii;
     c.ssp07 = s.ssp07;
+    c.density = s.density, c.isoLevel = s.isoLevel;
     c.tLow = s.tLow, c.tHigh = s.tHigh;
     c.background = s.background;
     return c;

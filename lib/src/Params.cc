@@ -80,10 +80,12 @@ void Params::validate() const
         throw ValueError("color-gradient threshold must be a finite number >= 0");
     if (adaptive && method != FieldMethod::NarrowBand)
         throw ValueError("the adaptive grid runs with the narrow-band method only");
-    if (field == FieldKind::Ssp07Aniso) {
+    if (isAnisotropic(field)) {
         if (method != FieldMethod::NarrowBand || adaptive)
-            throw ValueError("the ssp07-aniso field runs with the narrow-band method on the "
-                             "uniform grid only");
+            throw ValueError(std::string("the ") + fieldName(field) +
+                             " field runs with the narrow-band method on the uniform grid only");
+        if (field == FieldKind::Yt10 && !(isoLevel > 0 && isoLevel < 1))
+            throw ValueError("iso level must be in (0, 1) (got " + std::to_string(isoLevel) + ")");
         if (!(anisotropyRatio >= 1 && anisotropyRatio <= 8))
             throw ValueError("anisotropy ratio must be in [1, 8] (got " +
                              std::to_string(anisotropyRatio) + ")");
@@ -123,7 +125,17 @@ void Params::validate() const
 
 const char* fieldName(FieldKind f)
 {
-    return f == FieldKind::Ssp07 ? "ssp07" : f == FieldKind::Zb05 ? "zb05" : "ssp07-aniso";
+    switch (f) {
+    case FieldKind::Ssp07:
+        return "ssp07";
+    case FieldKind::Zb05:
+        return "zb05";
+    case FieldKind::Ssp07Aniso:
+        return "ssp07-aniso";
+    case FieldKind::Yt10:
+        return "yt10";
+    }
+    return "?";
 }
 
 const char* methodName(FieldMethod m)
@@ -144,7 +156,8 @@ FieldKind fieldFromName(const std::string& name)
     if (name == "ssp07") return FieldKind::Ssp07;
     if (name == "zb05") return FieldKind::Zb05;
     if (name == "ssp07-aniso") return FieldKind::Ssp07Aniso;
-    throw ValueError("unknown field '" + name + "' (ssp07, zb05, ssp07-aniso)");
+    if (name == "yt10") return FieldKind::Yt10;
+    throw ValueError("unknown field '" + name + "' (ssp07, zb05, ssp07-aniso, yt10)");
 }
 
 FieldMethod methodFromName(const std::string& name)

@@ -217,7 +217,7 @@ int runFieldBench(const FieldBenchOptions& o)
                 p.voxelSize = std::stod(v) * c.radius;
                 p.influenceRadius = std::stod(s) * c.radius;
                 double reference = 0, cpuField = 0, cpuField1 = 0;
-                double ssp07Field = 0, ssp07DeviceField = 0; // their field stages, s
+                double ssp07Field = 0, ssp07Field1 = 0, ssp07DeviceField = 0; // field stages, s
                 for (const std::string& m : methods) {
                     if (m == "narrow-band-cuda") {
                         p.method = FieldMethod::NarrowBand;
@@ -254,29 +254,42 @@ int runFieldBench(const FieldBenchOptions& o)
                             reference = r.median, cpuField = r.cpuFieldSeconds(),
                             ssp07Field = stageOf(r, "field");
                         else
-                            cpuField1 = r.cpuFieldSeconds();
+                            cpuField1 = r.cpuFieldSeconds(), ssp07Field1 = stageOf(r, "field");
                         printRow(r, reference);
-                    } else if (m == "aniso" || m == "aniso-cuda") {
-                        // ssp07-aniso (issue 64): its field stage against SSP07's in this run
+                    } else if (m == "aniso" || m == "aniso-cuda" || m == "yt10" || m == "yt10-1" ||
+                               m == "yt10-cuda") {
+                        // ssp07-aniso and yt10 (issue 64; yt10 as the thesis' Table 4.11: one
+                        // thread, all, the GPU): the field stage against SSP07's in this run
                         Params a = p;
-                        a.method = FieldMethod::NarrowBand, a.field = FieldKind::Ssp07Aniso;
-                        const bool cuda = m == "aniso-cuda";
-                        const Row r = runOurs(c, a, cuda ? Device::Cuda : Device::Cpu, hw, o.repeat,
-                                              cuda ? "ssp07-aniso, CUDA" : "ssp07-aniso");
+                        a.method = FieldMethod::NarrowBand;
+                        a.field = m.rfind("yt10", 0) == 0 ? FieldKind::Yt10 : FieldKind::Ssp07Aniso;
+                        const bool cuda = m.find("cuda") != std::string::npos;
+                        const int threads = m == "yt10-1" ? 1 : hw;
+                        const std::string label =
+                            std::string(fieldName(a.field)) + (cuda           ? ", CUDA"
+                                                               : threads == 1 ? ", 1 thread"
+                                                                              : "");
+                        const Row r = runOurs(c, a, cuda ? Device::Cuda : Device::Cpu, threads,
+                                              o.repeat, label);
                         printRow(r, reference);
-                        const double base = cuda ? ssp07DeviceField : ssp07Field;
+                        const double base = cuda           ? ssp07DeviceField
+                                            : threads == 1 ? ssp07Field1
+                                                           : ssp07Field;
+                        char ratio[32] = "(run narrow-band first)";
+                        if (base > 0)
+                            std::snprintf(ratio, sizeof(ratio), "%.2fx",
+                                          stageOf(r, "field") / base);
                         char buf[320];
-                        std::snprintf(
-                            buf, sizeof(buf),
-                            "%s, %s: kernel shapes %.1f ms, field %.1f ms, complete band "
-                            "%.1f ms; field / SSP07's %s %s",
-                            c.name.c_str(), r.method.c_str(), stageOf(r, "kernel shapes") * 1e3,
-                            stageOf(r, "field") * 1e3, stageOf(r, "complete band") * 1e3,
-                            cuda ? "device field" : "field",
-                            base > 0
-                                ? (std::to_string(stageOf(r, "field") / base).substr(0, 4) + "x")
-                                      .c_str()
-                                : "(run narrow-band first)");
+                        std::snprintf(buf, sizeof(buf),
+                                      "%s, %s: kernel shapes %.1f ms, field %.1f ms, complete "
+                                      "band %.1f ms; field / SSP07's %s %s",
+                                      c.name.c_str(), r.method.c_str(),
+                                      stageOf(r, "kernel shapes") * 1e3, stageOf(r, "field") * 1e3,
+                                      stageOf(r, "complete band") * 1e3,
+                                      cuda           ? "device field"
+                                      : threads == 1 ? "field (1 thread)"
+                                                     : "field",
+                                      ratio);
                         anisoNotes.push_back(buf);
                         if (cuda && !r.gpu.empty()) gpuNotes.push_back(r.gpu);
                     } else if (m == "gather-full" || m == "scatter") {
@@ -314,8 +327,8 @@ int runFieldBench(const FieldBenchOptions& o)
                 }
             }
     if (!anisoNotes.empty()) {
-        std::printf("\nssp07-aniso (medians; its field stage against SSP07's in the same run, "
-                    "CUDA against the device pipeline's whole field, sort to gather):\n\n");
+        std::printf("\nssp07-aniso and yt10 (medians; the field stage against SSP07's in the same "
+                    "run, CUDA against the device pipeline's whole field, sort to gather):\n\n");
         for (const std::string& n : anisoNotes)
             std::printf("- %s\n", n.c_str());
     }

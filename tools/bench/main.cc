@@ -55,8 +55,9 @@ int main(int argc, char** argv)
     fieldCmd
         ->add_option("--methods", field.methods,
                      "narrow-band, narrow-band-1 (one thread), narrow-band-cuda, "
-                     "gather-full, scatter, p2ls, smooth; aniso, aniso-cuda (ssp07-aniso, its "
-                     "field stage against narrow-band's or narrow-band-cuda's, listed before it)")
+                     "gather-full, scatter, p2ls, smooth; aniso, aniso-cuda (ssp07-aniso), yt10, "
+                     "yt10-1, yt10-cuda: the field stage against narrow-band's (-1, -cuda), "
+                     "listed before it")
         ->capture_default_str();
     fluidsurf::bench::MeshBenchOptions mesh;
     CLI::App* meshCmd = app.add_subcommand(
@@ -126,7 +127,8 @@ int main(int argc, char** argv)
     qualityCmd->add_option("--layers", quality.layers, "slab thickness")->capture_default_str();
     qualityCmd->add_option("--scenes", quality.scenes, "frames of the volume rows")
         ->capture_default_str();
-    qualityCmd->add_option("--field", quality.field, "our rows' field: ssp07, zb05, ssp07-aniso")
+    qualityCmd
+        ->add_option("--field", quality.field, "our rows' field: ssp07, zb05, ssp07-aniso, yt10")
         ->capture_default_str();
     qualityCmd->add_option("--smooth", quality.smooth, "our default rows' rounds of smoothing")
         ->capture_default_str();

@@ -135,21 +135,30 @@ void addFieldOptions(CLI::App* cmd, PipelineOptions& o)
                     "color field below this: surface particle")
         ->capture_default_str();
     cmd->add_option("--field", o.field,
-                    "ssp07, zb05, or ssp07-aniso (SSP07 with anisotropic kernels, [YT10]'s PCA: "
-                    "flatter faces; on the CPU for now)")
+                    "ssp07, zb05, ssp07-aniso (SSP07 with anisotropic kernels, [YT10]'s PCA: "
+                    "flatter faces), or yt10 ([YT10]'s density field with those kernels, "
+                    "thesis 4.4: phi = (iso level - density) R)")
         ->capture_default_str()
-        ->check(CLI::IsMember({"ssp07", "zb05", "ssp07-aniso"}));
-    cmd->add_option("--aniso-ratio", f.anisotropyRatio,
-                    "ssp07-aniso: a kernel's longest axis over its shortest (R), at most (k_r)")
+        ->check(CLI::IsMember({"ssp07", "zb05", "ssp07-aniso", "yt10"}));
+    cmd->add_option("--iso-level", f.isoLevel,
+                    "yt10: the density the surface passes through (about 1 inside the fluid; "
+                    "0.5 puts a flat lattice face r above its particles' centres)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.001, 0.999));
+    cmd->add_option(
+           "--aniso-ratio", f.anisotropyRatio,
+           "ssp07-aniso, yt10: a kernel's longest axis over its shortest (R), at most (k_r)")
         ->capture_default_str()
         ->check(CLI::Range(1.0, 8.0));
-    rel("--aniso-radius", f.anisotropyRadius, "ssp07-aniso: radius of each particle's PCA, in r");
-    cmd->add_option("--aniso-neighbours", f.anisotropyNeighbours,
-                    "ssp07-aniso: fewer neighbours within the PCA radius keep the sphere (N_eps)")
+    rel("--aniso-radius", f.anisotropyRadius,
+        "ssp07-aniso, yt10: radius of each particle's PCA, in r");
+    cmd->add_option(
+           "--aniso-neighbours", f.anisotropyNeighbours,
+           "ssp07-aniso, yt10: fewer neighbours within the PCA radius keep the sphere (N_eps)")
         ->capture_default_str()
         ->check(CLI::Range(0, 10000));
     cmd->add_option("--centre-smoothing", f.centreSmoothing,
-                    "ssp07-aniso: how far a surface particle's kernel centre moves to its "
+                    "ssp07-aniso, yt10: how far a surface particle's kernel centre moves to its "
                     "neighbours' mean, 0 to 1 (lambda)")
         ->capture_default_str()
         ->check(CLI::Range(0.0, 1.0));

@@ -134,6 +134,7 @@ const std::vector<Entry>& table()
         FS_POSITIVE("aniso_radius", anisotropyRadius),
         FS_INT("aniso_neighbours", kField, field.anisotropyNeighbours, 0, 10000),
         FS_REAL("centre_smoothing", kField, field.centreSmoothing, real),
+        FS_REAL("iso_level", kField, field.isoLevel, real),
         FS_CHOICE("method", kField, field.method, methodFromName, methodName),
         Entry{"ignore_radius_attribute", kField,
               [](Settings& s, py::handle v) {

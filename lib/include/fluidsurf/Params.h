@@ -18,10 +18,21 @@ enum class FieldKind {
     Zb05,  ///< Zhu & Bridson 2005: the same with f == 1 (faster, blobs in concave regions)
     /// SSP07 with [YT10]'s anisotropic kernels (issue 64): each surface particle's kernel
     /// stretched along the fluid's surface, from the PCA of its neighbours
-    /// (anisotropy/KernelShapes.h, field/AnisotropicField.h); flatter faces. On the CPU for now
-    /// (with --device cuda too), narrow band only, not adaptive.
-    Ssp07Aniso
+    /// (anisotropy/KernelShapes.h, field/AnisotropicField.h); flatter faces. Narrow band only,
+    /// not adaptive; the kernels' shapes are made on the CPU, the gather runs on either device.
+    Ssp07Aniso,
+    /// Yu & Turk's [YT10] density field (thesis §4.4) with the same kernels: phi = (isoLevel -
+    /// sum_j V_j W(x - c_j, G_j)) R, V_j = (2 r_j)^3, W = 315 / (64 pi) det(G) (1 - |G d|^2)^3
+    /// (normalised: about 1 inside the fluid). A density difference scaled by R, not a distance.
+    /// Narrow band only, not adaptive.
+    Yt10
 };
+
+/// Whether the field takes each particle's kernel shape (anisotropy/KernelShapes.h).
+inline bool isAnisotropic(FieldKind f)
+{
+    return f == FieldKind::Ssp07Aniso || f == FieldKind::Yt10;
+}
 
 /// How the field is computed. All three give the same field (up to float rounding for
 /// Scatter); they differ in cost and memory, which is what the thesis' Tables 4.4/4.5 compare.
@@ -56,19 +67,22 @@ struct Params
     bool keepIsolated = false; ///< isolated particles join the field as spheres of radius r
                                ///< (default: left out of the grid and reported)
     FieldKind field = FieldKind::Ssp07;
-    /// Ssp07Aniso: a kernel's longest axis over its shortest (which stays R) at most, k_r of
+    /// Yt10: the density the surface passes through, (0, 1): 0.5 puts a flat lattice face r
+    /// above its particles' centres, where their volumes end.
+    double isoLevel = 0.5;
+    /// Ssp07Aniso, Yt10: a kernel's longest axis over its shortest (which stays R) at most, k_r of
     /// [YT10]; 1 gives SSP07's field. 1.5 left no more components than SSP07 on every real frame;
     /// 1.75 and 2 made a jittered slab flatter still, but split thin sheets off (issue 64).
     double anisotropyRatio = 1.5;
-    /// Ssp07Aniso: the radius of each particle's PCA; default 8r (2h, as [YT10]: within h a
+    /// Ssp07Aniso, Yt10: the radius of each particle's PCA; default 8r (2h, as [YT10]: within h a
     /// particle of a flat face has about 17 neighbours, too few for a stable PCA).
     double anisotropyRadius = 0;
-    /// Ssp07Aniso: a particle with fewer neighbours within anisotropyRadius keeps the sphere
+    /// Ssp07Aniso, Yt10: a particle with fewer neighbours within anisotropyRadius keeps the sphere
     /// (N_eps of [YT10]).
     int anisotropyNeighbours = 25;
-    /// Ssp07Aniso: how far a surface particle's kernel centre moves to its neighbours' weighted
-    /// mean, lambda of [YT10], [0, 1]. Theirs, 0.9, took a jittered slab's top face below its
-    /// particles' centres; 0.1 made it bumpier than 0 (issue 64).
+    /// Ssp07Aniso, Yt10: how far a surface particle's kernel centre moves to its neighbours'
+    /// weighted mean, lambda of [YT10], [0, 1]. Theirs, 0.9, took a jittered slab's top face below
+    /// its particles' centres; 0.1 made it bumpier than 0 (issue 64).
     double centreSmoothing = 0;
     FieldMethod method = FieldMethod::NarrowBand;
     /// The curvature-adaptive 3-level grid of thesis chapter 6 (fluidsurf/AdaptiveGrid.h):
@@ -105,7 +119,7 @@ struct Params
     double background() const { return background(level()); }
 };
 
-const char* fieldName(FieldKind f);                  ///< "ssp07", "zb05"
+const char* fieldName(FieldKind f);                  ///< "ssp07", "zb05", "ssp07-aniso", "yt10"
 const char* methodName(FieldMethod m);               ///< "narrow-band", "gather-full", "scatter"
 FieldKind fieldFromName(const std::string& name);    ///< ValueError for unknown names
 FieldMethod methodFromName(const std::string& name); ///< ValueError for unknown names

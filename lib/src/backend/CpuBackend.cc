@@ -104,7 +104,7 @@ public:
         // the classes alone: the band and the field's particles need nothing else
         Classified c = classifyOnCpu(particles, params, ctx, out);
         narrowBandOnCpu(c, params, level, width, ctx, out);
-        if (params.field == FieldKind::Ssp07Aniso) {
+        if (isAnisotropic(params.field)) {
             mAniso = anisotropicStage(std::move(c), params, ctx);
             const auto t = ctx.scope("field");
             mParticles = nullptr;
@@ -123,7 +123,7 @@ public:
     size_t evaluate(openvdb::FloatTree& tree, const Params& params, const Level& level,
                     Context& ctx) override
     {
-        if (params.field == FieldKind::Ssp07Aniso) { // (narrowBand made the kernels)
+        if (isAnisotropic(params.field)) { // (narrowBand made the kernels)
             if (!mAniso) throw Error("CPU backend: evaluate() before the kernels were made");
             return field::evaluateAnisotropicField(tree, mAniso->table, params, level, ctx);
         }

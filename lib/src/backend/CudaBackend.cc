@@ -67,6 +67,7 @@ cuda::FieldSettings fieldSettings(const Params& params, const Level& level)
     f.tLow = params.tLow, f.tHigh = params.tHigh;
     f.background = float(params.background(level));
     f.ssp07 = params.field != FieldKind::Zb05;
+    f.density = params.field == FieldKind::Yt10, f.isoLevel = params.isoLevel;
     return f;
 }
 
@@ -184,7 +185,7 @@ public:
     bool narrowBand(const Particles& particles, const Params& params, const Level& level,
                     double width, Context& ctx, Band& out, std::string& whyNot) override
     {
-        if (params.field == FieldKind::Ssp07Aniso) {
+        if (isAnisotropic(params.field)) {
             // The classes, the band and the kernels' shapes on the CPU (their device versions
             // are issue 65's), the field on the device.
             Classified c = classifyOnCpu(particles, params, ctx, out);
@@ -292,6 +293,7 @@ public:
                     in.gather =
                         gatherInput(mAniso->kernels.centres, nullptr, nullptr, 0, params, level);
                     in.a = table.a.data(), in.extent = table.extent.data();
+                    in.weight = table.weight.empty() ? nullptr : table.weight.data();
                     in.reach = table.reach;
                     mAnisoGather = std::make_unique<cuda::AnisotropicGather>(in);
                 }
@@ -309,7 +311,7 @@ public:
                     Context& ctx) override
     {
         ctx.throwIfCancelled();
-        if (params.field == FieldKind::Ssp07Aniso) return evaluateAnisotropic(tree, params, level);
+        if (isAnisotropic(params.field)) return evaluateAnisotropic(tree, params, level);
         if (mPipeline) // the particles are on the device already
             return fillActiveVoxels(tree,
                                     [&](const int32_t* origins, const uint64_t* masks, size_t n) {

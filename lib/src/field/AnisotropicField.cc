@@ -233,6 +233,7 @@ struct Gather
     double dx;
     float invR2;
     bool radii, wide;
+    bool density; ///< Yt10: the radius slot carries V_j W's factor, and the sums go through it
 
     /// The kernels whose boxes overlap the box of the leaf's active voxels, leaf-local, in the
     /// cell index's order.
@@ -270,7 +271,7 @@ struct Gather
                 k.v[kCz][n] = float(double(p.z) - origin[2]);
                 for (int c = 0; c < 6; ++c)
                     k.v[kA0 + c][n] = kernels.a[6 * size_t(j) + c];
-                k.v[kR][n] = radii ? centres.radii[j] : 0.f;
+                k.v[kR][n] = density ? kernels.weight[j] : radii ? centres.radii[j] : 0.f;
                 k.v[kStretch][n] = kernels.stretch[j];
                 ++n;
             }
@@ -292,7 +293,7 @@ struct Gather
         size_t evaluations = 0;
         auto flush = [&] {
             float value[kBatch];
-            if (wide)
+            if (wide && !density) // (FieldValueWide has SSP07's formula alone)
                 fieldValuesWide(sum, m, constants, value);
             else
                 for (int q = 0; q < m; ++q)
@@ -368,6 +369,8 @@ AnisotropicKernels anisotropicKernels(const neighbors::CellIndex& centres, const
     AnisotropicKernels t;
     t.centres = &centres, t.reach = reach;
     t.a.resize(6 * n), t.extent.resize(3 * n), t.stretch.resize(n);
+    const bool density = params.field == FieldKind::Yt10;
+    if (density) t.weight.resize(n);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const auto& r) {
         for (size_t j = r.begin(); j != r.end(); ++j) {
             const float* g = shapes + 6 * j;
@@ -384,6 +387,13 @@ AnisotropicKernels anisotropicKernels(const neighbors::CellIndex& centres, const
                 lambda =
                     std::max(lambda, std::fabs(a[p][0]) + std::fabs(a[p][1]) + std::fabs(a[p][2]));
             t.stretch[j] = float(std::sqrt(lambda) * 1.0001);
+            if (density) {
+                const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                                   m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                                   m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+                const double r = centres.radii.empty() ? params.radius : centres.radii[j];
+                t.weight[j] = float(8 * r * r * r * 315 / (64 * M_PI) * det);
+            }
             const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
                                m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
                                m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
@@ -416,11 +426,15 @@ size_t detail::evaluateAnisotropicField(openvdb::FloatTree& tree, const Anisotro
     if (wide && fieldLanes() != util::kWideLanes)
         throw ValueError("evaluateAnisotropicField: the wide sums need a CPU with AVX2 and FMA");
     if (!kernels.centres) throw ValueError("evaluateAnisotropicField: no kernels");
-    const bool radii = !kernels.centres->radii.empty();
+    const bool density = params.field == FieldKind::Yt10;
+    if (density && kernels.weight.size() != kernels.centres->size())
+        throw ValueError("evaluateAnisotropicField: the yt10 field's kernels have no weights");
+    const bool radii = density || !kernels.centres->radii.empty();
     const double R = params.influenceRadius;
     const Gather gather{kernels,         fieldConstants(params, level, radii),
                         level.voxelSize, float(1 / (R * R)),
-                        radii,           wide};
+                        radii,           wide,
+                        density};
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
     std::atomic<size_t> evaluations{0};
     tbb::parallel_for(leaves.leafRange(1),

@@ -4,8 +4,10 @@
 // f-correction follow as in FieldValue.h: grad w_j = 6 t_j^2 A_j d_j with A_j = G_j^2 and d_j =
 // c_j - x, so J = grad x-bar = (6 / W) (sum t_j^2 d_j (A_j d_j)^T - (D / W) (sum t_j^2 A_j d_j)^T),
 // of which FieldMath's fieldValue needs the symmetric part. With G_j = I / R every sum is
-// FieldValue.h's. Parallel over leaves; each voxel's sums in float, kernel after kernel in the
-// cell index's order (AnisotropicSums.h), so the bits do not depend on the thread count.
+// FieldValue.h's. For Yt10 ([YT10]'s density, Params.h) the same gather sums V_j W in the radius
+// slot and FieldMath turns the sum into phi. Parallel over leaves; each voxel's sums in float,
+// kernel after kernel in the cell index's order (AnisotropicSums.h), so the bits do not depend on
+// the thread count.
 #pragma once
 
 #include "anisotropy/KernelShapes.h"
@@ -31,11 +33,14 @@ struct AnisotropicKernels
     std::vector<float> a;       ///< A' = R^2 G^2 (xx, xy, xz, yy, yz, zz): I for a sphere of R
     std::vector<float> extent;  ///< the box's half extents sqrt((G^-2)_aa), world units
     std::vector<float> stretch; ///< at least the root of A''s largest eigenvalue (1: a sphere of R)
-    double reach = 0;           ///< the most any kernel reaches, world units
+    /// Yt10 (else empty): V_j 315 / (64 pi) det(G_j), the density kernel's factor, V_j = (2 r_j)^3
+    std::vector<float> weight;
+    double reach = 0; ///< the most any kernel reaches, world units
 };
 
 /// From shapes[6 j ..], the G of centres' particle j (anisotropy::KernelParticles), and R =
-/// params.influenceRadius. reach: the most any kernel reaches (anisotropy::maxReach R).
+/// params.influenceRadius (and r_j = centres.radii or params.radius, for Yt10). reach: the most
+/// any kernel reaches (anisotropy::maxReach R).
 AnisotropicKernels anisotropicKernels(const neighbors::CellIndex& centres, const float* shapes,
                                       double reach, const Params& params);
 

@@ -27,6 +27,10 @@ struct FieldConstants
     double radiusScale = 1; ///< rbar's factor (Params::radiusScale)
     bool perParticleRadii = false;
     bool ssp07 = true;
+    /// [YT10]'s density field: phi = (isoLevel - the r-sum) R, where each kernel's radius slot
+    /// carries V_j W's factor (field/AnisotropicField.h)
+    bool density = false;
+    double isoLevel = 0.5;
     double tLow = 0.4, tHigh = 3.5;
     float background = 0; ///< phi is clamped to [-background, background]
 };
@@ -95,9 +99,12 @@ FLUIDSURF_HD FLUIDSURF_FIELD_INLINE T largestEigenvalueSym(const T a[6])
     return Ops::select(p2 > 1e-30 * (q * q + 1e-300), q + 2 * p * cosThirdOfAcos<Ops>(half), q);
 }
 
-/// phi at a vertex from its sums; +background when no particle is within R.
+/// phi at a vertex from its sums; +background when no particle is within R (SSP07, ZB05).
 FLUIDSURF_HD inline float fieldValue(const FieldSums& s, const FieldConstants& c)
 {
+    if (c.density)
+        return float(clampTo((c.isoLevel - s.r) * c.influenceRadius, -double(c.background),
+                             double(c.background)));
     if (!(s.w > 0)) return c.background;
     const double inv = 1 / s.w;
     const double xb[3] = {s.d[0] * inv, s.d[1] * inv, s.d[2] * inv};

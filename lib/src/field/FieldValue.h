@@ -134,6 +134,8 @@ inline FieldConstants fieldConstants(const Params& p, const Level& level, bool p
     c.radiusScale = p.radiusScale;
     c.perParticleRadii = perParticleRadii;
     c.ssp07 = p.field != FieldKind::Zb05; // Ssp07Aniso keeps the f-correction
+    c.density = p.field == FieldKind::Yt10;
+    c.isoLevel = p.isoLevel;
     c.tLow = p.tLow;
     c.tHigh = p.tHigh;
     c.background = float(p.background(level));

@@ -229,7 +229,8 @@ TEST(AnisotropicField, SameBytesOnOneThreadAndParametersChecked)
     EXPECT_STREQ(fieldName(FieldKind::Ssp07Aniso), "ssp07-aniso");
 }
 
-TEST(AnisotropicField, WideAndScalarSumsAndAnySubsetOfVoxelsGiveTheSameBits)
+namespace {
+void expectTheSameBitsEverywhere(FieldKind kind)
 {
     // The device tests kernels voxel by voxel, the host per block of a leaf's active box: the
     // bits must not depend on which kernels a test lets through (AnisotropicSums.h). Here the
@@ -239,7 +240,8 @@ TEST(AnisotropicField, WideAndScalarSumsAndAnySubsetOfVoxelsGiveTheSameBits)
     sp.radius = 0.025, sp.count = 4000, sp.layers = 2, sp.jitter = 0.3, sp.seed = 5;
     const ParticleSet ps = generateScene(Scene::Sheet, sp);
     Params p = anisoParams(sp.radius);
-    p.anisotropyRatio = 2.5, p.centreSmoothing = 0.3;
+    p.field = kind, p.anisotropyRatio = 2.5, p.centreSmoothing = 0.3;
+    SCOPED_TRACE(fieldName(kind));
     Context ctx;
     const RasterizeResult band = rasterizeParticles(ps, p, ctx); // the pipeline's own values
     const double cellSize = std::min(p.influenceRadius, p.smoothingLength);
@@ -282,4 +284,103 @@ TEST(AnisotropicField, WideAndScalarSumsAndAnySubsetOfVoxelsGiveTheSameBits)
         EXPECT_GT(n, checked / 3);
         EXPECT_EQ(mismatched, 0u) << "a checkerboard of the band";
     }
+}
+} // namespace
+
+TEST(AnisotropicField, WideAndScalarSumsAndAnySubsetOfVoxelsGiveTheSameBits)
+{
+    expectTheSameBitsEverywhere(FieldKind::Ssp07Aniso);
+    expectTheSameBitsEverywhere(FieldKind::Yt10);
+}
+
+namespace {
+
+/// [YT10]'s density at x over all kernels, in double: sum_j (2r)^3 315 / (64 pi) det(G_j)
+/// (1 - |G_j (c_j - x)|^2)^3.
+double bruteForceDensity(const Kernels& k, double r, const double x[3])
+{
+    double sum = 0;
+    for (size_t j = 0; j < k.centres.size(); ++j) {
+        if (k.isolated[j]) continue;
+        const auto& g = k.g[j];
+        const double d[3] = {k.centres[j].x - x[0], k.centres[j].y - x[1], k.centres[j].z - x[2]};
+        const double u[3] = {g[0] * d[0] + g[1] * d[1] + g[2] * d[2],
+                             g[1] * d[0] + g[3] * d[1] + g[4] * d[2],
+                             g[2] * d[0] + g[4] * d[1] + g[5] * d[2]};
+        const double t = 1 - (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        if (!(t > 1e-6)) continue;
+        const double det = g[0] * (g[3] * g[5] - g[4] * g[4]) - g[1] * (g[1] * g[5] - g[4] * g[2]) +
+                           g[2] * (g[1] * g[4] - g[3] * g[2]);
+        sum += 8 * r * r * r * 315 / (64 * M_PI) * det * t * t * t;
+    }
+    return sum;
+}
+
+} // namespace
+
+TEST(AnisotropicField, Yt10MatchesABruteForceDensity)
+{
+    for (Scene scene : {Scene::Sheet, Scene::Drop}) {
+        SceneParams sp;
+        sp.radius = 0.025, sp.count = 1500, sp.layers = 2, sp.jitter = 0.3, sp.seed = 7;
+        const ParticleSet ps = generateScene(scene, sp);
+        Params p = anisoParams(sp.radius);
+        p.field = FieldKind::Yt10, p.anisotropyRatio = 2.5, p.centreSmoothing = 0.3;
+        const Kernels kernels = kernelsOf(ps, p);
+        Context ctx;
+        const RasterizeResult res = rasterizeParticles(ps, p, ctx);
+        size_t checked = 0, bad = 0, crossings = 0;
+        double worst = 0;
+        size_t n = 0;
+        for (auto v = res.grid->tree().cbeginValueOn(); v; ++v, ++n) {
+            if (n % 5) continue;
+            const openvdb::Coord c = v.getCoord();
+            const double x[3] = {c.x() * p.voxelSize, c.y() * p.voxelSize, c.z() * p.voxelSize};
+            const double want = std::clamp((p.isoLevel - bruteForceDensity(kernels, sp.radius, x)) *
+                                               p.influenceRadius,
+                                           -p.background(), p.background());
+            const double err = std::fabs(*v - want);
+            worst = std::max(worst, err);
+            bad += err > 1e-4 * sp.radius;
+            crossings += std::fabs(want) < p.voxelSize;
+            ++checked;
+        }
+        EXPECT_GT(checked, 1000u) << sceneName(scene);
+        EXPECT_GT(crossings, 100u) << sceneName(scene) << ": the band holds the surface";
+        EXPECT_EQ(bad, 0u) << sceneName(scene) << ": worst " << worst / sp.radius << " r";
+    }
+}
+
+TEST(AnisotropicField, Yt10PutsALatticeFaceWhereItsParticlesVolumesEnd)
+{
+    // A normalised kernel smooths the particles' volumes, (2r)^3 each, into a density that a
+    // half-space of fluid takes to 1/2 at its boundary (the kernel is symmetric): on a lattice,
+    // r above the top layer's centres, so a block of N particles encloses about N (2r)^3. With
+    // anisotropy ratio 1 every kernel is the sphere of R.
+    SceneParams sp;
+    sp.radius = 0.025, sp.count = 20000, sp.jitter = 0;
+    const ParticleSet block = generateScene(Scene::Block, sp);
+    Params p = anisoParams(sp.radius);
+    p.field = FieldKind::Yt10, p.anisotropyRatio = 1;
+    Context ctx;
+    const TriangleMesh mesh =
+        meshLevelSet(*rasterizeParticles(block, p, ctx).grid, Mesher::MarchingCubes, ctx);
+    const MeshReport report = checkMesh(mesh);
+    EXPECT_TRUE(report.watertight()) << describe(report);
+    EXPECT_EQ(report.components, 1u);
+    const double ratio = report.volume / (double(block.size()) * std::pow(2 * sp.radius, 3));
+    EXPECT_NEAR(ratio, 1.0, 0.02);
+    double top = -1e300, lo = 1e300, hi = -1e300;
+    for (const Vec3f& q : block.positions)
+        top = std::max(top, double(q.z)), lo = std::min(lo, double(q.x)),
+        hi = std::max(hi, double(q.x));
+    double sum = 0;
+    size_t n = 0;
+    for (const Vec3f& q : mesh.points) { // the top face away from its edges
+        const double a = lo + 0.3 * (hi - lo), b = hi - 0.3 * (hi - lo);
+        if (q.x > a && q.x < b && q.y > a && q.y < b && q.z > top) sum += q.z, ++n;
+    }
+    ASSERT_GT(n, 50u);
+    EXPECT_NEAR(sum / double(n) - top, sp.radius, 0.05 * sp.radius);
+    ::testing::Test::RecordProperty("block_volume_ratio", std::to_string(ratio));
 }

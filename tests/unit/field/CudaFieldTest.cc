@@ -183,11 +183,11 @@ TEST(FieldCuda, TheWholeReconstructionMakesTheCpusMesh)
     expectSameReconstruction(drop, p, "drop_zb05");
 }
 
-TEST(FieldCuda, TheAnisotropicFieldIsTheCpusToTheBit)
+TEST(FieldCuda, TheAnisotropicFieldsAreTheCpusToTheBit)
 {
-    // ssp07-aniso: classes, band and kernel shapes on the CPU, the gather on the device, which
-    // tests kernels voxel by voxel where the CPU tests 2 x 2 x 2 blocks (AnisotropicSums.h: the
-    // same bits either way, on 8 lanes or one voxel at a time).
+    // ssp07-aniso and yt10: classes, band and kernel shapes on the CPU, the gather on the device,
+    // which tests kernels voxel by voxel where the CPU tests 2 x 2 x 2 blocks (AnisotropicSums.h:
+    // the same bits either way, on 8 lanes or one voxel at a time).
     FLUIDSURF_REQUIRE_GPU();
     SceneParams sp;
     sp.count = 20000, sp.jitter = 0.3, sp.layers = 2;
@@ -203,6 +203,9 @@ TEST(FieldCuda, TheAnisotropicFieldIsTheCpusToTheBit)
         Params fine = p;
         fine.voxelSize = 0.5 * sp.radius;
         expectSameField(ps, fine, name + "_voxel0.5", false);
+        Params yt10 = stretched;
+        yt10.field = FieldKind::Yt10;
+        expectSameField(ps, yt10, std::string(sceneName(scene)) + "_yt10", false);
     }
     ParticleSet ps = generateScene(Scene::Drop, sp);
     Attribute pscale;
@@ -214,12 +217,16 @@ TEST(FieldCuda, TheAnisotropicFieldIsTheCpusToTheBit)
     Params p = Params::fromRadius(sp.radius);
     p.field = FieldKind::Ssp07Aniso, p.keepIsolated = true;
     expectSameField(ps, p, "drop_pscale_keep_isolated_aniso", false);
+    p.field = FieldKind::Yt10;
+    expectSameField(ps, p, "drop_pscale_keep_isolated_yt10", false);
     FLUIDSURF_REQUIRE_SHARED_DATA();
     for (const test::RealFrame& f : test::kRealFrames) {
         Params q = Params::fromRadius(f.radius);
         q.field = FieldKind::Ssp07Aniso;
         const ParticleSet frame = io::readParticles(test::sharedData() + "/real/" + f.name);
         expectSameField(frame, q, std::string(f.name) + "_aniso", false);
+        q.field = FieldKind::Yt10;
+        expectSameField(frame, q, std::string(f.name) + "_yt10", false);
         if (field::fieldLanes() != 8) continue; // (the post-processing's own sums)
         ReconstructParams rp = ReconstructParams::fromRadius(f.radius);
         rp.field.field = FieldKind::Ssp07Aniso, rp.post.smooth = 20;
