@@ -41,22 +41,8 @@ struct Params
 /// doubles); false when none is active.
 __device__ bool activeBox(const Params& p, size_t leaf, double o[3], double lo[3], double hi[3])
 {
-    const unsigned long long* words = p.leafActive + 8 * leaf;
-    int first[3] = {8, 8, 8}, last[3] = {-1, -1, -1};
-    unsigned long long yz = 0;
-    for (int x = 0; x < 8; ++x)
-        if (words[x]) {
-            first[0] = min(first[0], x), last[0] = x;
-            yz |= words[x];
-        }
-    if (last[0] < 0) return false;
-    unsigned z = 0;
-    for (int y = 0; y < 8; ++y)
-        if (const unsigned row = unsigned(yz >> (8 * y)) & 0xffu) {
-            first[1] = min(first[1], y), last[1] = y;
-            z |= row;
-        }
-    first[2] = __ffs(z) - 1, last[2] = 31 - __clz(z);
+    int first[3], last[3];
+    if (!activeVoxelBounds(p.leafActive + 8 * leaf, first, last)) return false;
     for (int a = 0; a < 3; ++a) {
         o[a] = p.leafOrigins[3 * leaf + a] * p.dx;
         lo[a] = o[a] + first[a] * p.dx, hi[a] = o[a] + last[a] * p.dx;
@@ -130,16 +116,6 @@ __global__ void __launch_bounds__(kThreads) countKernel(Params p)
     if (threadIdx.x == 0) p.counts[blockIdx.x] = sh.total;
 }
 
-/// addKernel's operations on the device: the same roundings as the host's fmaf and AVX2 FMA.
-struct DeviceOps
-{
-    __device__ static float fma(float a, float b, float c) { return __fmaf_rn(a, b, c); }
-    __device__ static float fnma(float a, float b, float c) { return __fmaf_rn(-a, b, c); }
-    __device__ static float one() { return 1.f; }
-    __device__ static float cut(float t) { return t > 1e-6f ? t : 0.f; }
-    __device__ static bool none(float t) { return t == 0.f; }
-};
-
 template <bool Radii>
 __device__ void sumTile(field::AnisotropicAccumulator<float>& s, const Shared& sh, int n, float vx,
                         float vy, float vz, float invR2)
@@ -148,7 +124,7 @@ __device__ void sumTile(field::AnisotropicAccumulator<float>& s, const Shared& s
         const float4 c = sh.tile[0][k], a0 = sh.tile[1][k], a1 = sh.tile[2][k];
         const float centre[3] = {c.x, c.y, c.z};
         const float a[6] = {a0.x, a0.y, a0.z, a0.w, a1.x, a1.y};
-        field::addKernel<DeviceOps, Radii>(s, centre, a, c.w, vx, vy, vz, invR2);
+        field::addKernel<field::ScalarFloatOps, Radii>(s, centre, a, c.w, vx, vy, vz, invR2);
     }
 }
 

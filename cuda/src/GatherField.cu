@@ -50,22 +50,8 @@ struct Params
 /// is active.
 __device__ bool leafBox(const Params& p, size_t leaf, double o[3], double lo[3], double hi[3])
 {
-    const unsigned long long* words = p.leafActive + 8 * leaf;
-    int first[3] = {8, 8, 8}, last[3] = {-1, -1, -1};
-    unsigned long long yz = 0;
-    for (int x = 0; x < 8; ++x)
-        if (words[x]) {
-            first[0] = min(first[0], x), last[0] = x;
-            yz |= words[x];
-        }
-    if (last[0] < 0) return false;
-    unsigned z = 0;
-    for (int y = 0; y < 8; ++y)
-        if (const unsigned row = unsigned(yz >> (8 * y)) & 0xffu) {
-            first[1] = min(first[1], y), last[1] = y;
-            z |= row;
-        }
-    first[2] = __ffs(z) - 1, last[2] = 31 - __clz(z);
+    int first[3], last[3];
+    if (!activeVoxelBounds(p.leafActive + 8 * leaf, first, last)) return false;
     const GatherLayout& g = p.layout;
     for (int a = 0; a < 3; ++a)
         o[a] = p.leafOrigins[3 * leaf + a] * g.dx;

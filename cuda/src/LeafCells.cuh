@@ -16,6 +16,29 @@ constexpr int kCellChunk = 512;   // occupied-cell lookups per pass
 static_assert(kCellChunk % kLeafThreads == 0 && kLeafThreads % 32 == 0,
               "whole warps, whole rounds");
 
+/// The box of a leaf's active voxels, leaf-local voxel indices [first, last] from its 8 mask
+/// words (word x, bit y 8 + z); false when none is active.
+__device__ inline bool activeVoxelBounds(const unsigned long long* words, int first[3], int last[3])
+{
+    for (int a = 0; a < 3; ++a)
+        first[a] = 8, last[a] = -1;
+    unsigned long long yz = 0;
+    for (int x = 0; x < 8; ++x)
+        if (words[x]) {
+            first[0] = min(first[0], x), last[0] = x;
+            yz |= words[x];
+        }
+    if (last[0] < 0) return false;
+    unsigned z = 0;
+    for (int y = 0; y < 8; ++y)
+        if (const unsigned row = unsigned(yz >> (8 * y)) & 0xffu) {
+            first[1] = min(first[1], y), last[1] = y;
+            z |= row;
+        }
+    first[2] = __ffs(z) - 1, last[2] = 31 - __clz(z);
+    return true;
+}
+
 /// The block's threads with `keep`, numbered in thread order from `kept` (shared), which then
 /// counts them too: where each writes, in order. All threads call it (it synchronises).
 __device__ inline uint32_t keptSlot(bool keep, int* warpFound, uint32_t& kept)

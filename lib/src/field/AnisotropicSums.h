@@ -75,8 +75,8 @@ FLUIDSURF_HD inline FieldSums toSums(float w, float d0, float d1, float d2, floa
     return s;
 }
 
-/// addKernel's operations on one float (the host's fallback; the CUDA gather has its own with
-/// __fmaf_rn, which is the same operation).
+/// addKernel's operations on one float: the host's fallback, and the CUDA gather's (fmaf is one
+/// fused, correctly rounded operation on both, as AVX2's FMA is).
 struct ScalarFloatOps
 {
     FLUIDSURF_HD static float fma(float a, float b, float c) { return fmaf(a, b, c); }

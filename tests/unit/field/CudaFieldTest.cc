@@ -23,6 +23,18 @@
 namespace fluidsurf {
 namespace {
 
+/// ps with a radius attribute (pscale) of 0.8 r to 1.2 r.
+ParticleSet withPscale(ParticleSet ps, double r)
+{
+    Attribute pscale;
+    pscale.name = "pscale";
+    pscale.floats.resize(ps.size());
+    for (size_t i = 0; i < ps.size(); ++i)
+        pscale.floats[i] = float(r * (0.8 + 0.4 * double(i % 7) / 6));
+    ps.attributes.push_back(pscale);
+    return ps;
+}
+
 /// CPU and CUDA grids of the same particles and parameters agree.
 void expectSameField(const ParticleSet& ps, Params p, const std::string& what,
                      bool devicePipeline = true)
@@ -101,13 +113,7 @@ TEST(FieldCuda, MatchesCpuOnGeneratedScenesAndSettings)
         expectSameField(ps, full, std::string(sceneName(scene)) + "_gather_full");
     }
     // Per-particle radii (pscale) and isolated particles kept as spheres.
-    ParticleSet ps = generateScene(Scene::Drop, sp);
-    Attribute pscale;
-    pscale.name = "pscale";
-    pscale.floats.resize(ps.size());
-    for (size_t i = 0; i < ps.size(); ++i)
-        pscale.floats[i] = float(sp.radius * (0.8 + 0.4 * double(i % 7) / 6));
-    ps.attributes.push_back(pscale);
+    const ParticleSet ps = withPscale(generateScene(Scene::Drop, sp), sp.radius);
     Params p = Params::fromRadius(sp.radius);
     p.keepIsolated = true;
     expectSameField(ps, p, "drop_pscale_keep_isolated");
@@ -207,13 +213,7 @@ TEST(FieldCuda, TheAnisotropicFieldsAreTheCpusToTheBit)
         yt10.field = FieldKind::Yt10;
         expectSameField(ps, yt10, std::string(sceneName(scene)) + "_yt10", false);
     }
-    ParticleSet ps = generateScene(Scene::Drop, sp);
-    Attribute pscale;
-    pscale.name = "pscale";
-    pscale.floats.resize(ps.size());
-    for (size_t i = 0; i < ps.size(); ++i)
-        pscale.floats[i] = float(sp.radius * (0.8 + 0.4 * double(i % 7) / 6));
-    ps.attributes.push_back(pscale);
+    const ParticleSet ps = withPscale(generateScene(Scene::Drop, sp), sp.radius);
     Params p = Params::fromRadius(sp.radius);
     p.field = FieldKind::Ssp07Aniso, p.keepIsolated = true;
     expectSameField(ps, p, "drop_pscale_keep_isolated_aniso", false);

@@ -3,15 +3,14 @@
 // no more components than the raw SSP07 mesh (no new blobs). Its distance to that mesh and the
 // particles it leaves outside (ray parity, MeshInside.h) are recorded, not held to the issue's
 // 1 r and 99.9%: it misses both (1.7-2.2 r on four frames, where the kernels stretched along
-// the surface carry it past rims; up to 2.9% of the centres outside, where 0.15-0.7% already lie
-// outside today's default), which is why it is not the default. Thin sheets and jets come out
-// whole (ThinFeaturesTest does the same for the default).
+// the surface carry it past rims and across narrow gaps; up to 2.9% of the centres outside, where
+// 0.1-0.7% already lie outside today's default), which is why it is not the default. Thin sheets
+// and jets: ThinFeaturesTest, for it and for the default.
 #include "MeshInside.h"
 #include "TestData.h"
 
 #include <fluidsurf/MeshCheck.h>
 #include <fluidsurf/Reconstruct.h>
-#include <fluidsurf/Scenes.h>
 #include <fluidsurf/io/ParticleIO.h>
 
 #include <gtest/gtest.h>
@@ -66,37 +65,6 @@ TEST(FlatWater, RealFramesAreClosedWithNoNewBlobs)
                                         std::to_string(distance));
         ::testing::Test::RecordProperty(std::string(f.name) + "_centres_outside",
                                         std::to_string(kept.size() - in));
-    }
-}
-
-TEST(FlatWater, SheetsAndJetsAreOneClosedComponentAroundTheirParticles)
-{
-    struct Case
-    {
-        Scene scene;
-        int layers;
-        double jitter;
-    };
-    const Case cases[] = {
-        {Scene::Sheet, 1, 0.2}, {Scene::Sheet, 2, 0.2}, {Scene::Jet, 1, 0.1}, {Scene::Jet, 2, 0.2}};
-    for (const Case& c : cases) {
-        SceneParams sp;
-        sp.count = 6000, sp.radius = 0.025, sp.layers = c.layers, sp.jitter = c.jitter;
-        const ParticleSet ps = generateScene(c.scene, sp);
-        SCOPED_TRACE(std::string(sceneName(c.scene)) + " of " + std::to_string(c.layers) +
-                     " layers");
-        Context ctx;
-        const ReconstructResult res = reconstruct(ps, flatWater(sp.radius), ctx);
-        const MeshReport report = checkMesh(res.mesh);
-        EXPECT_TRUE(report.watertight()) << describe(report);
-        EXPECT_EQ(res.isolatedParticles.size(), 0u);
-        EXPECT_EQ(report.components, 1u);
-        const std::vector<bool> inside = test::insideMesh(res.mesh, ps.positions);
-        TriangleMesh outside;
-        for (size_t i = 0; i < ps.size(); ++i)
-            if (!inside[i]) outside.points.push_back(ps.positions[i]);
-        EXPECT_LE(meshDistance(outside, res.mesh, sp.radius), 0.25 * sp.radius)
-            << outside.points.size() << " of " << ps.size() << " centres outside the surface";
     }
 }
 
