@@ -381,7 +381,7 @@ Runner addReconstructCommand(CLI::App& app)
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.ply --adaptive --vdb frame.vdb\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.ply --attributes v,density,id\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.ply --field ssp07-aniso --smooth 20\n"
-        "      (flatter water: stretched kernels along the surface, on the CPU for now)\n"
+        "      (flatter water: kernels stretched along the surface; CPU or CUDA)\n"
         "  fluidsurf reconstruct 'sim/f_{:04}.bgeo' -r 0.025 -o 'ply/f_{:04}.ply' --shard 3/8 \\\n"
         "      --skip-existing --keep-going     (the 3rd of 8 tasks; re-runs skip finished "
         "frames)\n"
