@@ -2,10 +2,10 @@
 // flatter than splashsurf 0.14 (BENCHMARKS.md), on every real fluid frame: closed and manifold,
 // no more components than the raw SSP07 mesh (no new blobs). Its distance to that mesh and the
 // particles it leaves outside (ray parity, MeshInside.h) are recorded, not held to the issue's
-// 1 r and 99.9%: it misses both (1.7-2.2 r on four frames, where the kernels stretched along
-// the surface carry it past rims and across narrow gaps; up to 2.9% of the centres outside, where
-// 0.1-0.7% already lie outside today's default), which is why it is not the default. Thin sheets
-// and jets: ThinFeaturesTest, for it and for the default.
+// 1 r and 99.9%: it misses both (1.7-2.2 r on four frames, where the stretched kernels carry it
+// into sparse regions and narrow gaps, 2.1-2.9 r from the nearest particle; up to 2.9% of the
+// centres outside, where 0.1-0.7% already lie outside today's default), which is why it is not
+// the default. Thin sheets and jets: ThinFeaturesTest, for it and for the default.
 #include "MeshInside.h"
 #include "TestData.h"
 
