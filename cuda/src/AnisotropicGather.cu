@@ -214,18 +214,7 @@ AnisotropicGather::AnisotropicGather(const AnisotropicInput& in)
     DeviceMemory& mem = mImpl->mem;
     StageEvents events(mImpl->stream.get());
     Params& p = mImpl->p;
-    p.cells.count = g.particleCount;
-    p.cells.positions = mem.upload(reinterpret_cast<const float3*>(g.positions), g.particleCount);
-    p.cells.radii = g.radii ? mem.upload(g.radii, g.particleCount) : nullptr;
-    p.cells.starts = mem.upload(g.cellStarts, g.cellCount + 1);
-    p.cells.tableKeys =
-        mem.upload(reinterpret_cast<const unsigned long long*>(g.tableKeys), g.tableSize);
-    p.cells.tableCells = mem.upload(g.tableCells, g.tableSize);
-    p.cells.tableMask = g.tableSize - 1;
-    p.cells.cellCount = g.cellCount;
-    p.cells.cellSize = g.cellSize;
-    for (int a = 0; a < 3; ++a)
-        p.cells.origin[a] = g.cellOrigin[a], p.cells.dims[a] = int(g.cellDims[a]);
+    p.cells = uploadCells(g, mem);
     p.a = mem.upload(in.a, 6 * g.particleCount);
     p.extent = mem.upload(in.extent, 3 * g.particleCount);
     p.weight = in.weight ? mem.upload(in.weight, g.particleCount) : nullptr;
@@ -261,24 +250,16 @@ std::vector<float> AnisotropicGather::evaluate(const int32_t* leafOrigins,
     p.leafBase = 0;
     countKernel<<<unsigned(leafCount), kThreads, 0, stream>>>(p);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    std::vector<uint32_t> counts(leafCount);
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(counts.data(), p.counts, leafCount * sizeof(uint32_t),
-                                         cudaMemcpyDeviceToHost, stream));
-    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
-    std::vector<unsigned long long> offsets;
-    for (size_t begin = 0, end = 0; begin < leafCount; begin = end) {
-        offsets.clear();
-        unsigned long long total = 0;
-        for (end = begin; end < leafCount && (end == begin || total + counts[end] <= kBatchKernels);
-             ++end)
-            offsets.push_back(total), total += counts[end];
-        p.leafBase = begin;
-        p.offsets = mem.upload(offsets.data(), offsets.size());
-        p.kernels = mem.alloc<float4>(3 * total + 1);
-        fieldKernel<<<unsigned(end - begin), kThreads, 0, stream>>>(p);
-        FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-        mem.release(p.offsets), mem.release(p.kernels);
-    }
+    forEachLeafBatch(p.counts, leafCount, kBatchKernels, stream,
+                     [&](size_t begin, size_t end, const std::vector<unsigned long long>& offsets,
+                         unsigned long long total) {
+                         p.leafBase = begin;
+                         p.offsets = mem.upload(offsets.data(), offsets.size());
+                         p.kernels = mem.alloc<float4>(3 * total + 1);
+                         fieldKernel<<<unsigned(end - begin), kThreads, 0, stream>>>(p);
+                         FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+                         mem.release(p.offsets), mem.release(p.kernels);
+                     });
     events.mark("gather kernel");
     FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), p.out, out.size() * sizeof(float),
                                          cudaMemcpyDeviceToHost, stream));

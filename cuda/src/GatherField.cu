@@ -373,43 +373,25 @@ void gatherLeaves(const DeviceCells& cells, const int32_t* origins, const unsign
     p.counts = mem.alloc<uint32_t>(leafCount);
     countKernel<<<unsigned(leafCount), kThreads, 0, stream>>>(p);
     FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-    std::vector<uint32_t> counts(leafCount);
-    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(counts.data(), p.counts, leafCount * sizeof(uint32_t),
-                                         cudaMemcpyDeviceToHost, stream));
-    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    forEachLeafBatch(p.counts, leafCount, kBatchParticles, stream,
+                     [&](size_t begin, size_t end, const std::vector<unsigned long long>& offsets,
+                         unsigned long long total) {
+                         p.leafBase = begin;
+                         p.candidateOffsets = mem.upload(offsets.data(), offsets.size());
+                         p.gathered = mem.alloc<float4>(total), p.sorted = mem.alloc<float4>(total);
+                         p.bucketOf = mem.alloc<uint32_t>(total);
+                         fieldKernel<<<unsigned(end - begin), kThreads, shared, stream>>>(p);
+                         FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+                         for (const void* scratch :
+                              {(const void*)p.candidateOffsets, (const void*)p.gathered,
+                               (const void*)p.sorted, (const void*)p.bucketOf})
+                             mem.release(scratch);
+                     });
     mem.release(p.counts);
-    p.counts = nullptr;
-    std::vector<unsigned long long> offsets;
-    for (size_t begin = 0, end = 0; begin < leafCount; begin = end) {
-        offsets.clear();
-        unsigned long long total = 0;
-        for (end = begin;
-             end < leafCount && (end == begin || total + counts[end] <= kBatchParticles); ++end)
-            offsets.push_back(total), total += counts[end];
-        p.leafBase = begin;
-        p.candidateOffsets = mem.upload(offsets.data(), offsets.size());
-        p.gathered = mem.alloc<float4>(total), p.sorted = mem.alloc<float4>(total);
-        p.bucketOf = mem.alloc<uint32_t>(total);
-        fieldKernel<<<unsigned(end - begin), kThreads, shared, stream>>>(p);
-        FLUIDSURF_CUDA_CHECK(cudaGetLastError());
-        for (const void* scratch : {(const void*)p.candidateOffsets, (const void*)p.gathered,
-                                    (const void*)p.sorted, (const void*)p.bucketOf})
-            mem.release(scratch);
-    }
 }
 
-std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* streamPtr)
+DeviceCells uploadCells(const GatherInput& in, DeviceMemory& mem)
 {
-    std::vector<float> out(in.leafCount * 512, in.field.background);
-    if (in.leafCount == 0) return out;
-    if (!(in.cellSize > 0 && in.field.voxelSize > 0 && in.field.influenceRadius > 0))
-        throw Error("gatherField: invalid sizes");
-    if (in.tableSize == 0 || (in.tableSize & (in.tableSize - 1)))
-        throw Error("gatherField: the cell hash table size must be a power of two");
-    const Stream ownStream(streamPtr);
-    const cudaStream_t stream = ownStream.get();
-    DeviceMemory mem(stream);
-    StageEvents events(stream);
     static_assert(sizeof(Vec3f) == sizeof(float3), "Vec3f must be three packed floats");
     DeviceCells cells;
     cells.count = in.particleCount;
@@ -424,6 +406,22 @@ std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* 
     cells.cellSize = in.cellSize;
     for (int a = 0; a < 3; ++a)
         cells.origin[a] = in.cellOrigin[a], cells.dims[a] = int(in.cellDims[a]);
+    return cells;
+}
+
+std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* streamPtr)
+{
+    std::vector<float> out(in.leafCount * 512, in.field.background);
+    if (in.leafCount == 0) return out;
+    if (!(in.cellSize > 0 && in.field.voxelSize > 0 && in.field.influenceRadius > 0))
+        throw Error("gatherField: invalid sizes");
+    if (in.tableSize == 0 || (in.tableSize & (in.tableSize - 1)))
+        throw Error("gatherField: the cell hash table size must be a power of two");
+    const Stream ownStream(streamPtr);
+    const cudaStream_t stream = ownStream.get();
+    DeviceMemory mem(stream);
+    StageEvents events(stream);
+    const DeviceCells cells = uploadCells(in, mem);
     const int32_t* origins = mem.upload(in.leafOrigins, 3 * in.leafCount);
     const unsigned long long* masks =
         mem.upload(reinterpret_cast<const unsigned long long*>(in.leafActive), 8 * in.leafCount);

@@ -4,9 +4,11 @@
 // AnisotropicGather.cu), whose sums depend on that order.
 #pragma once
 
+#include "Check.cuh"
 #include "DeviceCells.cuh"
 
 #include <cstdint>
+#include <vector>
 
 namespace fluidsurf {
 namespace cuda {
@@ -115,6 +117,28 @@ __device__ inline uint32_t particleAt(const uint32_t* cellBegin, const uint32_t*
             hi = mid - 1;
     }
     return cellBegin[lo] + (flat - cellPrefix[lo]);
+}
+
+/// How many items (particles, kernels) each of leafCount leaves gathers: countKernel's output,
+/// brought to the host (synchronises). Then the leaves in batches whose scratch holds at most
+/// `limit` items (a leaf with more runs alone): run(begin, end, offsets, total), offsets[i] where
+/// leaf begin + i's items start.
+template <typename Run>
+void forEachLeafBatch(const uint32_t* deviceCounts, size_t leafCount, unsigned long long limit,
+                      cudaStream_t stream, Run&& run)
+{
+    std::vector<uint32_t> counts(leafCount);
+    FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(counts.data(), deviceCounts, leafCount * sizeof(uint32_t),
+                                         cudaMemcpyDeviceToHost, stream));
+    FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
+    std::vector<unsigned long long> offsets;
+    for (size_t begin = 0, end = 0; begin < leafCount; begin = end) {
+        offsets.clear();
+        unsigned long long total = 0;
+        for (end = begin; end < leafCount && (end == begin || total + counts[end] <= limit); ++end)
+            offsets.push_back(total), total += counts[end];
+        run(begin, end, offsets, total);
+    }
 }
 
 } // namespace cuda

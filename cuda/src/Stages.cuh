@@ -72,6 +72,9 @@ DeviceLeaves markBand(const DeviceCells& cells, const uint8_t* classes, const Ba
 /// FieldMath's constants from the facade's settings.
 field::FieldConstants fieldConstants(const FieldSettings& s, bool perParticleRadii);
 
+/// The cell index of in (its particles, cell ranges and hash table) on the device.
+DeviceCells uploadCells(const GatherInput& in, DeviceMemory& mem);
+
 /// phi for the 512 voxels of every leaf into out (leaf after leaf; inactive: background); or,
 /// with compactOffsets (per leaf, the number of active voxels in the leaves before it), only the
 /// active voxels, leaf after leaf in voxel order: a thin band fills ~15% of its leaves, so this
