@@ -90,14 +90,15 @@ int runSequenceBench(const SequenceBenchOptions& options);
 
 struct QualityBenchOptions
 {
-    std::string jitters = "0.2,0.3,0.4";       ///< of the slab, in lattice spacings
-    size_t count = 20000;                      ///< slab particles
-    double radius = 0.025;                     ///< slab r
-    int layers = 6;                            ///< slab thickness in particles
-    std::string scenes = "real,large";         ///< the volume rows
-    std::string field = "ssp07";               ///< our rows' field (Params::field)
-    int smooth = PostProcessParams().smooth;   ///< our default rows' rounds of smoothing
-    double radiusScale = Params().radiusScale; ///< our rows' Params::radiusScale
+    std::string jitters = "0.2,0.3,0.4";               ///< of the slab, in lattice spacings
+    size_t count = 20000;                              ///< slab particles
+    double radius = 0.025;                             ///< slab r
+    int layers = 6;                                    ///< slab thickness in particles
+    std::string scenes = "real,large";                 ///< the volume rows
+    std::string field = "ssp07";                       ///< our rows' field (Params::field)
+    int smooth = PostProcessParams().smooth;           ///< our default rows' rounds of smoothing
+    double radiusScale = Params().radiusScale;         ///< our rows' Params::radiusScale
+    double anisotropyRatio = Params().anisotropyRatio; ///< our rows' Params::anisotropyRatio
     std::string splashsurf;   ///< splashsurf 0.14's program for same-run rows; empty: none
     std::string dir = "/tmp"; ///< where splashsurf's input and output go (removed after)
     std::string shared = "../shared/data";

@@ -99,6 +99,7 @@ ReconstructParams defaultParams(const QualityBenchOptions& o, double r)
     ReconstructParams p = ReconstructParams::fromRadius(r);
     p.field.field = fieldFromName(o.field);
     p.field.radiusScale = o.radiusScale;
+    p.field.anisotropyRatio = o.anisotropyRatio;
     p.post.smooth = o.smooth;
     return p;
 }
@@ -116,13 +117,14 @@ ReconstructParams rawParams(const QualityBenchOptions& o, double r)
 int runQualityBench(const QualityBenchOptions& o)
 {
     const bool peer = !o.splashsurf.empty();
-    std::printf("fluidsurf_bench quality: field %s, radius scale %g, %d rounds of smoothing; voxel "
-                "= r, R = 4r (our defaults)%s\n\n",
-                o.field.c_str(), o.radiusScale, o.smooth,
-                peer ? "; splashsurf in the same run: smoothed `-l 2.0 -c 1.0 -t 0.6 "
-                       "--mesh-smoothing-weights=on --mesh-smoothing-iters=25 --mesh-cleanup=on`, "
-                       "raw `-l 2.0 -c 1.0 -t 0.6`"
-                     : "");
+    std::printf(
+        "fluidsurf_bench quality: field %s, radius scale %g, anisotropy ratio %g, %d rounds "
+        "of smoothing; voxel = r, R = 4r (our defaults)%s\n\n",
+        o.field.c_str(), o.radiusScale, o.anisotropyRatio, o.smooth,
+        peer ? "; splashsurf in the same run: smoothed `-l 2.0 -c 1.0 -t 0.6 "
+               "--mesh-smoothing-weights=on --mesh-smoothing-iters=25 --mesh-cleanup=on`, "
+               "raw `-l 2.0 -c 1.0 -t 0.6`"
+             : "");
     std::printf("**Flat fluid**: `generate slab -n %zu -r %g --layers %d --jitter J`, the top face "
                 "over the middle 60%% across: RMS of vertex heights about their mean, mean normal "
                 "deviation (degrees), triangles of the whole mesh\n\n",
@@ -151,9 +153,11 @@ int runQualityBench(const QualityBenchOptions& o)
         if (peer) row("splashsurf smoothed", splashsurf(o, slab, o.radius, kSplashSmooth));
     }
     std::printf("\n**Volume**: enclosed volume / N (2r)^3; components (our droplet spheres aside); "
-                "Hausdorff distance from the default mesh to the raw one, in r\n\n");
+                "distance from the default mesh to the raw one and to today's raw SSP07 mesh (one "
+                "side of the Hausdorff distance: the default mesh's farthest point), in r\n\n");
     std::printf("| frame | N | ours raw | ours default | splashsurf raw | components raw / default "
-                "| Hausdorff default-raw (r) |\n|---|---|---|---|---|---|---|\n");
+                "| default to raw (r) | default to raw SSP07 (r) |\n"
+                "|---|---|---|---|---|---|---|---|\n");
     for (const Case& c : loadCases(o.scenes, o.shared)) {
         const double particleVolume = double(c.particles.size()) * std::pow(2 * c.radius, 3);
         Context ctx;
@@ -166,11 +170,15 @@ int runQualityBench(const QualityBenchOptions& o)
                           checkMesh(splashsurf(o, c.particles, c.radius, kSplashRaw)).volume /
                               particleVolume);
         const double reach = 4 * c.radius;
-        std::printf("| %s | %zu | %.3f | %.3f | %s | %zu / %zu | %.3f |\n", c.name.c_str(),
+        ReconstructParams ssp07 = ReconstructParams::fromRadius(c.radius);
+        ssp07.post.decimate = 0, ssp07.post.smooth = 0, ssp07.post.subdivide = 0;
+        const double toSsp07 =
+            meshDistance(def.mesh, reconstruct(c.particles, ssp07, ctx).mesh, reach) / c.radius;
+        std::printf("| %s | %zu | %.3f | %.3f | %s | %zu / %zu | %.3f | %.3f |\n", c.name.c_str(),
                     c.particles.size(), rr.volume / particleVolume, dr.volume / particleVolume,
                     splash, rr.components - raw.isolatedSpheres,
                     dr.components - def.isolatedSpheres,
-                    meshDistance(def.mesh, raw.mesh, reach) / c.radius);
+                    meshDistance(def.mesh, raw.mesh, reach) / c.radius, toSsp07);
         std::fflush(stdout);
     }
     return 0;

@@ -134,6 +134,9 @@ int main(int argc, char** argv)
         ->capture_default_str();
     qualityCmd->add_option("--radius-scale", quality.radiusScale, "our rows' radius scale")
         ->capture_default_str();
+    qualityCmd->add_option("--aniso-ratio", quality.anisotropyRatio, "our rows' anisotropy ratio")
+        ->capture_default_str();
+
     qualityCmd->add_option("--splashsurf", quality.splashsurf,
                            "splashsurf's program, e.g. "
                            "/tmp/peers-new/splashsurf-0.14.0/target/release/splashsurf");
