@@ -100,11 +100,22 @@ def test_single_particle_level_set_is_the_sphere_of_radius_r():
 def test_post_process_of_a_mesh_matches_reconstruct(cli, tmp_path):
     _, positions = block_xyz(cli, tmp_path, 8000)
     raw = fluidsurf.reconstruct(positions, R, raw=True)
-    full = fluidsurf.reconstruct(positions, R)
+    # a mesh alone keeps its own volumes (it has no particles to count)
+    full = fluidsurf.reconstruct(positions, R, volume="mesh")
     post = fluidsurf.post_process(raw, voxel_size=R)
     np.testing.assert_array_equal(post.triangles, full.triangles)
     np.testing.assert_array_equal(post.vertices, full.vertices)
     assert post.info["input_triangles"] == len(raw.triangles)
+    # the default brings the block to its particles' volume, N (2r)^3, where the raw surface
+    # holds less; raw=True takes no volume target
+    particles = fluidsurf.reconstruct(positions, R)
+    block = len(positions) * (2 * R) ** 3
+    assert post.check()["volume"] < 0.98 * block
+    assert particles.check()["volume"] == pytest.approx(block, rel=0.01)
+    with pytest.raises(ValueError, match="raw=True excludes"):
+        fluidsurf.reconstruct(positions, R, raw=True, volume="mesh")
+    with pytest.raises(TypeError, match="unknown parameter 'volume'"):
+        fluidsurf.post_process(raw, volume="particles")
 
 
 def test_mesh_from_arrays_round_trips_through_a_file(tmp_path):

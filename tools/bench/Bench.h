@@ -99,6 +99,7 @@ struct QualityBenchOptions
     int smooth = PostProcessParams().smooth;           ///< our default rows' rounds of smoothing
     double radiusScale = Params().radiusScale;         ///< our rows' Params::radiusScale
     double anisotropyRatio = Params().anisotropyRatio; ///< our rows' Params::anisotropyRatio
+    std::string volume = volumeTargetName(PostProcessParams().volume); ///< our default rows'
     std::string splashsurf;   ///< splashsurf 0.14's program for same-run rows; empty: none
     std::string dir = "/tmp"; ///< where splashsurf's input and output go (removed after)
     std::string shared = "../shared/data";

@@ -101,6 +101,7 @@ ReconstructParams defaultParams(const QualityBenchOptions& o, double r)
     p.field.radiusScale = o.radiusScale;
     p.field.anisotropyRatio = o.anisotropyRatio;
     p.post.smooth = o.smooth;
+    p.post.volume = volumeTargetFromName(o.volume);
     return p;
 }
 

@@ -136,6 +136,11 @@ int main(int argc, char** argv)
         ->capture_default_str();
     qualityCmd->add_option("--aniso-ratio", quality.anisotropyRatio, "our rows' anisotropy ratio")
         ->capture_default_str();
+    qualityCmd
+        ->add_option("--volume", quality.volume,
+                     "our default rows' volume target: mesh or particles")
+        ->capture_default_str()
+        ->check(CLI::IsMember({"mesh", "particles"}));
 
     qualityCmd->add_option("--splashsurf", quality.splashsurf,
                            "splashsurf's program, e.g. "

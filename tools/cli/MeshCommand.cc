@@ -371,6 +371,14 @@ Runner addReconstructCommand(CLI::App& app)
         ->capture_default_str()
         ->check(CLI::Range(1e-6, 0.5));
     addPostOptions(cmd, o->pipeline);
+    cmd->get_option("--raw")->excludes(
+        cmd->add_option("--volume", o->pipeline.volume,
+                        "what each closed component's volume is brought to after decimation, "
+                        "smoothing and subdivision (an offset of at most 0.3 voxel): particles "
+                        "(those inside it, N (2r)^3: SPH's fluid volume; SSP07's raw surface "
+                        "holds 80-95% of it) or mesh (what marching cubes enclosed)")
+            ->capture_default_str()
+            ->check(CLI::IsMember({"mesh", "particles"})));
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"

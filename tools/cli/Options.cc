@@ -226,6 +226,7 @@ ReconstructParams PipelineOptions::resolved() const
     p.mesh.mesher = mesherFromName(mesher);
     p.post.isolated = isolatedModeFromName(isolated);
     p.post.decimator = decimatorFromName(decimator);
+    p.post.volume = volumeTargetFromName(volume);
     if (decimate == "off") {
         p.post.decimate = 0;
     } else {

@@ -24,7 +24,7 @@ struct PipelineOptions
 {
     ReconstructParams params; ///< params.field: lengths in r
     std::string field = "ssp07", method = "narrow-band", device = "cpu", mesher = "mc",
-                isolated = "spheres", decimate = "0.8", decimator = "quadric";
+                isolated = "spheres", decimate = "0.8", decimator = "quadric", volume = "particles";
     bool ignoreRadiusAttribute = false;
     bool raw = false; ///< --raw: no decimation, smoothing or subdivision
     int threads = 0;

@@ -171,6 +171,7 @@ const std::vector<Entry>& table()
         Entry{"raw", kPost, [](Settings& s, py::handle v) { s.raw = flag("raw", v); },
               [](const Settings& s) -> py::object { return py::bool_(s.raw); }},
         FS_CHOICE("isolated", kSpheres, post.isolated, isolatedModeFromName, isolatedModeName),
+        FS_CHOICE("volume", kSpheres, post.volume, volumeTargetFromName, volumeTargetName),
         FS_REAL("sphere_deviation", kSpheres, post.sphereDeviation, positive),
         Entry{"threads", kRun,
               [](Settings& s, py::handle v) {
@@ -210,9 +211,9 @@ Settings settingsFrom(const py::kwargs& kwargs, unsigned groups)
     if (s.raw) {
         if (kwargs.contains("decimate") || kwargs.contains("decimate_error") ||
             kwargs.contains("smooth") || kwargs.contains("subdivide") ||
-            kwargs.contains("decimator"))
-            throw ValueError(
-                "raw=True excludes decimate, decimate_error, decimator, smooth and subdivide");
+            kwargs.contains("decimator") || kwargs.contains("volume"))
+            throw ValueError("raw=True excludes decimate, decimate_error, decimator, smooth, "
+                             "subdivide and volume");
         PostProcessParams& p = s.params.post;
         p.decimate = 0, p.decimateError = 0, p.smooth = 0, p.subdivide = 0;
     }

@@ -20,7 +20,7 @@ enum ParamGroup : unsigned {
     kField = 1,   ///< rasterize, reconstruct
     kMesh = 2,    ///< LevelSet.mesh, reconstruct
     kPost = 4,    ///< post_process, reconstruct
-    kSpheres = 8, ///< reconstruct only: isolated particles as spheres (it has the particles)
+    kSpheres = 8, ///< reconstruct only, what needs the particles: spheres, the volume target
     kRun = 16,    ///< every computing call: threads, device
     kAll = kField | kMesh | kPost | kSpheres | kRun
 };

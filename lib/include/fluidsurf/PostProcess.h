@@ -31,6 +31,25 @@ enum class Decimator {
 const char* decimatorName(Decimator d);               ///< "quadric", "openmesh"
 Decimator decimatorFromName(const std::string& name); ///< ValueError for unknown names
 
+/// The volume each closed component is offset back to after the surface steps (at most 0.3
+/// voxel; lib/src/post/Volumes.h), which shrink what curves.
+enum class VolumeTarget {
+    Mesh,     ///< what the raw mesh enclosed
+    Particles ///< the particles inside it, sum (2 r_j)^3: SPH's volume of the fluid at rest
+              ///< (SSP07's raw surface encloses 80-95% of it on real frames; issue 64)
+};
+const char* volumeTargetName(VolumeTarget v);               ///< "mesh", "particles"
+VolumeTarget volumeTargetFromName(const std::string& name); ///< ValueError for unknown names
+
+/// The particles VolumeTarget::Particles counts (reconstruct() passes its own), world units.
+struct ParticleVolumes
+{
+    const Vec3f* positions = nullptr;
+    const float* radii = nullptr; ///< per particle, or null for `radius`
+    double radius = 0;
+    size_t count = 0;
+};
+
 /// Mesh post-processing (thesis chapter 5), in this order: decimation, smoothing (ours), Loop
 /// subdivision, isolated particles as spheres. Each surface step moves the surface by a bounded
 /// amount (a share of half a voxel, lib/src/post/PostProcess.cc), so that thin tips and
@@ -59,6 +78,11 @@ struct PostProcessParams
     /// Loop subdivision steps after decimation, each 4x the triangles, rounding off the edges
     /// that decimation leaves (0 to 3).
     int subdivide = 1;
+    /// With any step on. Particles where the particles are known (reconstruct(), or
+    /// postProcessMesh's `particles`); a mesh alone (`fluidsurf post`, Python's post_process)
+    /// keeps its own volumes. On the real frames the particles' volume puts every frame's mesh
+    /// closer to N (2r)^3 than splashsurf 0.14's (BENCHMARKS.md, issue 64).
+    VolumeTarget volume = VolumeTarget::Particles;
     /// reconstruct() only (it has the particles). Spheres by default, as the thesis: a droplet
     /// is part of the fluid, and dropping it silently loses it from the mesh.
     IsolatedMode isolated = IsolatedMode::Spheres;
@@ -81,9 +105,12 @@ struct PostProcessStats
 };
 
 /// The surface steps of params on mesh, in order, each timed in ctx under the current scope;
-/// mesh stays closed, manifold and oriented where it was. ValueError for invalid params (or a
-/// non-manifold mesh for Decimator::OpenMesh), Cancelled when ctx's callback stops it.
+/// mesh stays closed, manifold and oriented where it was. particles: those the mesh was made
+/// from, for VolumeTarget::Particles (null: the mesh's own volumes). ValueError for invalid
+/// params (or a non-manifold mesh for Decimator::OpenMesh), Cancelled when ctx's callback stops
+/// it.
 TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params, Context& ctx,
-                             PostProcessStats* stats = nullptr);
+                             PostProcessStats* stats = nullptr,
+                             const ParticleVolumes* particles = nullptr);
 
 } // namespace fluidsurf

@@ -198,7 +198,13 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
         const auto postScope = ctx.scope("post"); // always there: timing trees keep one shape
         PostProcessParams post = params.post;
         if (!(post.voxelSize > 0)) post.voxelSize = voxel;
-        res.mesh = postProcessMesh(std::move(res.mesh), post, ctx, &res.post);
+        ParticleVolumes volumes;
+        volumes.positions = particles.positions.data(), volumes.count = particles.size();
+        // the field's radii, as the spheres below take them
+        const Attribute* a =
+            params.field.perParticleRadii ? particles.find(AttributeRole::Radius) : nullptr;
+        volumes.radii = a ? a->floats.data() : nullptr, volumes.radius = res.radius.radius;
+        res.mesh = postProcessMesh(std::move(res.mesh), post, ctx, &res.post, &volumes);
         if (params.post.isolated == IsolatedMode::Spheres && !res.isolatedParticles.empty()) {
             const auto t = ctx.scope("isolated spheres");
             res.isolatedSpheres = appendIsolatedSpheres(res.mesh, particles, res.isolatedParticles,

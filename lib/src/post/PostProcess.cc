@@ -5,6 +5,7 @@
 #include "post/Decimate.h"
 #include "post/LoopSubdivision.h"
 #include "post/OpenMeshDecimate.h"
+#include "post/ParticleVolumes.h"
 #include "post/Smooth.h"
 #include "post/Volumes.h"
 #include "util/Vec3d.h"
@@ -23,6 +24,18 @@ IsolatedMode isolatedModeFromName(const std::string& name)
     if (name == "drop") return IsolatedMode::Drop;
     if (name == "spheres") return IsolatedMode::Spheres;
     throw ValueError("unknown isolated-particle mode '" + name + "' (drop, spheres)");
+}
+
+const char* volumeTargetName(VolumeTarget v)
+{
+    return v == VolumeTarget::Particles ? "particles" : "mesh";
+}
+
+VolumeTarget volumeTargetFromName(const std::string& name)
+{
+    if (name == "mesh") return VolumeTarget::Mesh;
+    if (name == "particles") return VolumeTarget::Particles;
+    throw ValueError("unknown volume target '" + name + "' (mesh or particles)");
 }
 
 const char* decimatorName(Decimator d)
@@ -91,7 +104,7 @@ double meanEdgeLength(const TriangleMesh& mesh)
 } // namespace
 
 TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params, Context& ctx,
-                             PostProcessStats* stats)
+                             PostProcessStats* stats, const ParticleVolumes* particles)
 {
     validate(params);
     PostProcessStats st;
@@ -109,6 +122,10 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
         before = post::findComponents(mesh);
     }
     std::vector<uint32_t> component = std::move(before.ofPoint); // (not needed there again)
+    if (params.volume == VolumeTarget::Particles && particles) {
+        const auto t = ctx.scope("particle volumes");
+        post::useParticleVolumes(before, mesh, component, *particles, voxel);
+    }
     const bool decimating = params.decimate > 0 || params.decimateError > 0;
     if (!decimating) post::markClosed(before, mesh, component);
     if (decimating) {

@@ -145,10 +145,14 @@ TEST(Reconstruct, PostProcessingComesBeforeTheSpheres)
     Context a, b, c;
     const ReconstructResult plain = reconstruct(ps, raw, a);
     const ReconstructResult res = reconstruct(ps, ReconstructParams::fromRadius(sp.radius), b);
-    // the defaults: 80% decimated, smoothed, one Loop step, the bounds counted in its voxels
+    // the defaults: 80% decimated, smoothed, one Loop step, the bounds counted in its voxels,
+    // components brought to their particles' volume
     PostProcessParams post;
     post.voxelSize = plain.levelSet->voxelSize()[0];
-    const TriangleMesh smooth = postProcessMesh(plain.mesh, post, c);
+    ParticleVolumes volumes;
+    volumes.positions = ps.positions.data(), volumes.count = ps.size();
+    volumes.radius = sp.radius;
+    const TriangleMesh smooth = postProcessMesh(plain.mesh, post, c, nullptr, &volumes);
     EXPECT_EQ(res.post.inputTriangles, plain.mesh.triangles.size());
     EXPECT_LE(res.post.decimatedTriangles, size_t(std::ceil(0.2 * plain.mesh.triangles.size())));
     ASSERT_EQ(res.isolatedSpheres, size_t(sp.droplets));
@@ -172,9 +176,9 @@ TEST(Reconstruct, TimingTreeNestsTheStages)
     ctx.timing().finish();
     const TimingTree& t = ctx.timing();
     const auto& nodes = t.nodes();
-    // Top level: rasterize, mesh, then post (its steps between the volumes taken and given
-    // back; no spheres: a ball has no isolated particles); the field's stages nest inside
-    // rasterize.
+    // Top level: rasterize, mesh, then post (its steps between the volumes taken, with the
+    // particles', and given back; no spheres: a ball has no isolated particles); the field's
+    // stages nest inside rasterize.
     ASSERT_EQ(t.root().children.size(), 3u);
     EXPECT_EQ(nodes[t.root().children[0]].name, "rasterize");
     EXPECT_EQ(nodes[t.root().children[1]].name, "mesh");
@@ -182,8 +186,8 @@ TEST(Reconstruct, TimingTreeNestsTheStages)
     std::vector<std::string> post;
     for (size_t c : nodes[t.root().children[2]].children)
         post.push_back(nodes[c].name);
-    EXPECT_EQ(post,
-              (std::vector<std::string>{"volumes", "decimate", "smooth", "subdivide", "volumes"}));
+    EXPECT_EQ(post, (std::vector<std::string>{"volumes", "particle volumes", "decimate", "smooth",
+                                              "subdivide", "volumes"}));
     std::vector<std::string> inner;
     double sum = 0;
     for (size_t c : nodes[t.root().children[0]].children)

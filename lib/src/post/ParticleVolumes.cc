@@ -1,0 +1,272 @@
+// ParticleVolumes.cc - which component holds each particle, and the components' particle volumes
+// (see the header).
+//
+// Why a ray and not the nearest vertex: a particle deep inside a pool is many voxels from any
+// vertex, and one beside a thin sheet is nearer the sheet than the droplet it sits in. Along the
+// ray, the crossings that leave the fluid (the triangle's outward normal has a positive x) less
+// those that enter it say whether the particle is in the fluid; the closed components crossed an
+// odd number of times are those around it, and the first of them crossed, the innermost, holds
+// it (a droplet in a cavity of a pool is its own).
+#include "post/ParticleVolumes.h"
+
+#include "util/Vec3d.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+namespace fluidsurf {
+namespace post {
+
+namespace {
+
+/// The triangles binned by the cells of the plane across the rays that their boxes overlap
+/// (CSR). The rays run along `axis`, with (u, v) the next two axes in cyclic order, so that the
+/// normal's component along the ray is ab_u ae_v - ab_v ae_u.
+struct Columns
+{
+    int axis = 0, u = 1, v = 2;
+    double u0 = 0, v0 = 0, cell = 1;
+    int64_t nu = 0, nv = 0;
+    std::vector<uint32_t> start, tris;
+
+    int64_t cellOf(double x, double origin) const
+    {
+        return int64_t(std::floor((x - origin) / cell));
+    }
+};
+
+/// The axis most of the surface faces (the largest sum of |n_a| area): a surface that runs along
+/// the rays puts all its triangles in the few columns it lies in, and flat water does.
+int rayAxis(const TriangleMesh& mesh)
+{
+    struct Sum
+    {
+        double s[3] = {0, 0, 0};
+    };
+    // (deterministic: the same chunks added in the same order for any thread count)
+    const Sum total = tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<size_t>(0, mesh.triangles.size(), 1 << 14), Sum{},
+        [&](const tbb::blocked_range<size_t>& r, Sum acc) {
+            for (size_t t = r.begin(); t != r.end(); ++t) {
+                const auto& tri = mesh.triangles[t];
+                const Vec3d a = toVec3d(mesh.points[tri[0]]);
+                const Vec3d n =
+                    (toVec3d(mesh.points[tri[1]]) - a).cross(toVec3d(mesh.points[tri[2]]) - a);
+                for (int k = 0; k < 3; ++k)
+                    acc.s[k] += std::fabs(n[k]);
+            }
+            return acc;
+        },
+        [](Sum a, const Sum& b) {
+            for (int k = 0; k < 3; ++k)
+                a.s[k] += b.s[k];
+            return a;
+        },
+        tbb::simple_partitioner());
+    return total.s[0] >= total.s[1] && total.s[0] >= total.s[2] ? 0
+           : total.s[1] >= total.s[2]                           ? 1
+                                                                : 2;
+}
+
+Columns binTriangles(const TriangleMesh& mesh, double cellSize)
+{
+    Columns g;
+    g.axis = rayAxis(mesh), g.u = (g.axis + 1) % 3, g.v = (g.axis + 2) % 3;
+    double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+    for (const Vec3f& p : mesh.points)
+        lo[0] = std::min(lo[0], double(p[g.u])), hi[0] = std::max(hi[0], double(p[g.u])),
+        lo[1] = std::min(lo[1], double(p[g.v])), hi[1] = std::max(hi[1], double(p[g.v]));
+    g.u0 = lo[0], g.v0 = lo[1];
+    // at most about 4M columns: the grid's counters stay small whatever the cell
+    const double extent = std::max(hi[0] - lo[0], hi[1] - lo[1]);
+    g.cell = std::max(cellSize, extent / 2048);
+    if (!(g.cell > 0)) g.cell = 1;
+    g.nu = g.cellOf(hi[0], g.u0) + 1, g.nv = g.cellOf(hi[1], g.v0) + 1;
+    const size_t columns = size_t(g.nu * g.nv);
+    auto box = [&](const std::array<uint32_t, 3>& t, int64_t c0[2], int64_t c1[2]) {
+        double a[2] = {1e300, 1e300}, b[2] = {-1e300, -1e300};
+        for (uint32_t i : t) {
+            const Vec3f& p = mesh.points[i];
+            a[0] = std::min(a[0], double(p[g.u])), b[0] = std::max(b[0], double(p[g.u]));
+            a[1] = std::min(a[1], double(p[g.v])), b[1] = std::max(b[1], double(p[g.v]));
+        }
+        c0[0] = g.cellOf(a[0], g.u0), c1[0] = g.cellOf(b[0], g.u0);
+        c0[1] = g.cellOf(a[1], g.v0), c1[1] = g.cellOf(b[1], g.v0);
+    };
+    // each column a triangle's box overlaps, f(column); counted and filled on all threads (a
+    // column's order does not matter: the crossings are gathered per component, by count and
+    // nearest)
+    auto forEachColumn = [&](size_t t, auto&& f) {
+        int64_t c0[2], c1[2];
+        box(mesh.triangles[t], c0, c1);
+        for (int64_t y = c0[1]; y <= c1[1]; ++y)
+            for (int64_t x = c0[0]; x <= c1[0]; ++x)
+                f(size_t(y * g.nu + x));
+    };
+    std::vector<std::atomic<uint32_t>> count(columns + 1);
+    const size_t nt = mesh.triangles.size();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, nt, 1 << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t t = r.begin(); t != r.end(); ++t)
+                              forEachColumn(t, [&](size_t c) {
+                                  count[c + 1].fetch_add(1, std::memory_order_relaxed);
+                              });
+                      });
+    g.start.resize(columns + 1);
+    g.start[0] = 0;
+    for (size_t c = 0; c < columns; ++c)
+        g.start[c + 1] = g.start[c] + count[c + 1].load(std::memory_order_relaxed);
+    g.tris.resize(g.start[columns]);
+    for (size_t c = 0; c < columns; ++c)
+        count[c].store(g.start[c], std::memory_order_relaxed);
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, nt, 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t t = r.begin(); t != r.end(); ++t)
+                forEachColumn(t, [&](size_t c) {
+                    g.tris[count[c].fetch_add(1, std::memory_order_relaxed)] = uint32_t(t);
+                });
+        });
+    return g;
+}
+
+} // namespace
+
+std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
+                                            const std::vector<uint32_t>& ofPoint,
+                                            const Components& c, const ParticleVolumes& particles,
+                                            double cellSize)
+{
+    std::vector<uint32_t> out(particles.count, kNoComponent);
+    if (mesh.triangles.empty() || particles.count == 0) return out;
+    const Columns g = binTriangles(mesh, cellSize);
+    const int A = g.axis, U = g.u, V = g.v;
+    // the ray starts a hair off the particle across it, so that it meets no edge or corner of
+    // the mesh (whose points are floats) and crosses each surface exactly once where it does
+    const double nudgeU = 1.4142135623e-7 * g.cell, nudgeV = 1.7320508075e-7 * g.cell;
+    // the particles sorted by column (counting sort, in input order within one), so that each
+    // column's triangles are set up once and stay in cache for all its particles
+    const size_t columns = g.start.size() - 1;
+    std::vector<uint32_t> columnOf(particles.count), first(columns + 1, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.count, 1 << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i) {
+                              const Vec3f& q = particles.positions[i];
+                              const int64_t cu = g.cellOf(double(q[U]) + nudgeU, g.u0),
+                                            cv = g.cellOf(double(q[V]) + nudgeV, g.v0);
+                              const bool in = cu >= 0 && cv >= 0 && cu < g.nu && cv < g.nv;
+                              columnOf[i] = in ? uint32_t(cv * g.nu + cu) : UINT32_MAX;
+                          }
+                      });
+    for (uint32_t c : columnOf)
+        if (c != UINT32_MAX) ++first[c + 1];
+    for (size_t c = 0; c < columns; ++c)
+        first[c + 1] += first[c];
+    std::vector<uint32_t> sorted(first[columns]);
+    {
+        std::vector<uint32_t> fill(first.begin(), first.end() - 1);
+        for (size_t i = 0; i < particles.count; ++i)
+            if (columnOf[i] != UINT32_MAX) sorted[fill[columnOf[i]]++] = uint32_t(i);
+    }
+    /// A triangle across the column: its barycentric s and w and its crossing x as linear
+    /// functions of the ray's (u, v), taken from the column's corner (small numbers, no
+    /// cancellation far from the origin).
+    struct Plane
+    {
+        double su, sv, s0, wu, wv, w0, xa, xs, xw;
+        uint32_t comp;
+        int sign;
+    };
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, columns, 64), [&](const tbb::blocked_range<size_t>& r) {
+            struct Crossing
+            {
+                uint32_t comp;
+                int count;
+                double nearest;
+            };
+            std::vector<Crossing> crossed;
+            std::vector<Plane> planes;
+            for (size_t col = r.begin(); col != r.end(); ++col) {
+                if (first[col] == first[col + 1] || g.start[col] == g.start[col + 1]) continue;
+                const double cu0 = g.u0 + double(int64_t(col) % g.nu) * g.cell,
+                             cv0 = g.v0 + double(int64_t(col) / g.nu) * g.cell;
+                planes.clear();
+                for (uint32_t k = g.start[col]; k < g.start[col + 1]; ++k) {
+                    const auto& t = mesh.triangles[g.tris[k]];
+                    const uint32_t comp = ofPoint[t[0]];
+                    if (comp == kNoComponent) continue;
+                    const Vec3d a = toVec3d(mesh.points[t[0]]), b = toVec3d(mesh.points[t[1]]),
+                                e = toVec3d(mesh.points[t[2]]);
+                    const Vec3d ab = b - a, ae = e - a;
+                    const double n = ab[U] * ae[V] - ab[V] * ae[U]; // the normal along the ray
+                    if (n == 0) continue;                           // edge-on to the ray
+                    const double au = a[U] - cu0, av = a[V] - cv0;
+                    Plane pl;
+                    pl.su = ae[V] / n, pl.sv = -ae[U] / n, pl.s0 = (av * ae[U] - au * ae[V]) / n;
+                    pl.wu = -ab[V] / n, pl.wv = ab[U] / n, pl.w0 = (au * ab[V] - av * ab[U]) / n;
+                    pl.xa = a[A], pl.xs = ab[A], pl.xw = ae[A];
+                    pl.comp = comp, pl.sign = n > 0 ? 1 : -1;
+                    planes.push_back(pl);
+                }
+                for (uint32_t at = first[col]; at < first[col + 1]; ++at) {
+                    const size_t i = sorted[at];
+                    const Vec3f& q = particles.positions[i];
+                    const double u = double(q[U]) + nudgeU - cu0, v = double(q[V]) + nudgeV - cv0,
+                                 x0 = double(q[A]);
+                    crossed.clear();
+                    int winding = 0; // leaving crossings less entering ones ahead: 1 inside
+                    for (const Plane& pl : planes) {
+                        const double s = pl.su * u + pl.sv * v + pl.s0,
+                                     w = pl.wu * u + pl.wv * v + pl.w0;
+                        if (!(s >= 0 && w >= 0 && s + w <= 1)) continue;
+                        const double x = pl.xa + s * pl.xs + w * pl.xw;
+                        if (!(x > x0)) continue;
+                        winding += pl.sign;
+                        auto it =
+                            std::find_if(crossed.begin(), crossed.end(),
+                                         [&](const Crossing& c) { return c.comp == pl.comp; });
+                        if (it == crossed.end())
+                            crossed.push_back({pl.comp, 1, x});
+                        else
+                            ++it->count, it->nearest = std::min(it->nearest, x);
+                    }
+                    if (winding <= 0) continue; // outside the fluid (or in a cavity of it)
+                    // the components around the particle are those the ray crosses an odd
+                    // number of times; of the outward ones (a cavity's faces point in: negative
+                    // volume) the innermost, crossed first
+                    double nearest = std::numeric_limits<double>::infinity();
+                    for (const Crossing& cr : crossed)
+                        if ((cr.count & 1) && c.volume[cr.comp] > 0 && cr.nearest < nearest)
+                            nearest = cr.nearest, out[i] = cr.comp;
+                }
+            }
+        });
+    return out;
+}
+
+size_t useParticleVolumes(Components& c, const TriangleMesh& mesh,
+                          const std::vector<uint32_t>& ofPoint, const ParticleVolumes& particles,
+                          double cellSize)
+{
+    const std::vector<uint32_t> of = componentsOfParticles(mesh, ofPoint, c, particles, cellSize);
+    std::vector<double> sum(c.volume.size(), 0.0);
+    for (size_t i = 0; i < of.size(); ++i) {
+        if (of[i] == kNoComponent) continue;
+        const double d = 2 * (particles.radii ? double(particles.radii[i]) : particles.radius);
+        sum[of[i]] += d * d * d;
+    }
+    size_t changed = 0;
+    for (size_t k = 0; k < sum.size(); ++k)
+        if (sum[k] > 0) c.volume[k] = c.volume[k] > 0 ? sum[k] : -sum[k], ++changed;
+    return changed;
+}
+
+} // namespace post
+} // namespace fluidsurf
