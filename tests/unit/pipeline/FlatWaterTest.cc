@@ -38,6 +38,18 @@ ReconstructParams rawSsp07(double r)
     return p;
 }
 
+/// The centres of the particles that res did not find isolated (the field's particles).
+std::vector<Vec3f> nonIsolated(const ParticleSet& ps, const ReconstructResult& res)
+{
+    std::vector<uint32_t> isolated = res.isolatedParticles;
+    std::sort(isolated.begin(), isolated.end());
+    std::vector<Vec3f> kept;
+    for (uint32_t i = 0; i < ps.size(); ++i)
+        if (!std::binary_search(isolated.begin(), isolated.end(), i))
+            kept.push_back(ps.positions[i]);
+    return kept;
+}
+
 } // namespace
 
 TEST(FlatWater, RealFramesAreClosedWithNoNewBlobs)
@@ -55,12 +67,7 @@ TEST(FlatWater, RealFramesAreClosedWithNoNewBlobs)
         EXPECT_LE(report.components - flat.isolatedSpheres,
                   rawReport.components - raw.isolatedSpheres);
         const double distance = meshDistance(flat.mesh, raw.mesh, 4 * f.radius) / f.radius;
-        std::vector<uint32_t> isolated = flat.isolatedParticles;
-        std::sort(isolated.begin(), isolated.end());
-        std::vector<Vec3f> kept;
-        for (uint32_t i = 0; i < ps.size(); ++i)
-            if (!std::binary_search(isolated.begin(), isolated.end(), i))
-                kept.push_back(ps.positions[i]);
+        const std::vector<Vec3f> kept = nonIsolated(ps, flat);
         const std::vector<bool> inside = test::insideMesh(flat.mesh, kept);
         const size_t in = size_t(std::count(inside.begin(), inside.end(), true));
         ::testing::Test::RecordProperty(std::string(f.name) + "_distance_to_raw_ssp07_in_r",
@@ -92,12 +99,7 @@ TEST(FlatWater, TheParticlesVolumeKeepsMoreCentresInside)
             p.post.volume = v;
             Context ctx;
             const ReconstructResult res = reconstruct(ps, p, ctx);
-            std::vector<uint32_t> isolated = res.isolatedParticles;
-            std::sort(isolated.begin(), isolated.end());
-            std::vector<Vec3f> kept;
-            for (uint32_t i = 0; i < ps.size(); ++i)
-                if (!std::binary_search(isolated.begin(), isolated.end(), i))
-                    kept.push_back(ps.positions[i]);
+            const std::vector<Vec3f> kept = nonIsolated(ps, res);
             const std::vector<bool> inside = test::insideMesh(res.mesh, kept);
             for (size_t k = 0; k < kept.size(); ++k) {
                 if (inside[k]) continue;
