@@ -122,10 +122,13 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
         before = post::findComponents(mesh);
     }
     std::vector<uint32_t> component = std::move(before.ofPoint); // (not needed there again)
-    if (params.volume == VolumeTarget::Particles && particles) {
+    // the targets, once the components whose volumes are kept are known
+    auto particleTargets = [&] {
+        if (params.volume != VolumeTarget::Particles || !particles) return;
         const auto t = ctx.scope("particle volumes");
         post::useParticleVolumes(before, mesh, component, *particles, voxel);
-    }
+    };
+    particleTargets();
     const bool decimating = params.decimate > 0 || params.decimateError > 0;
     if (!decimating) post::markClosed(before, mesh, component);
     if (decimating) {
@@ -140,6 +143,7 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
             before = post::findComponents(mesh);
             component = before.ofPoint;
             post::markClosed(before, mesh, component);
+            particleTargets();
         } else {
             post::DecimateTarget to{target};
             if (params.decimateError > 0) to.maxDrift = params.decimateError * voxel;
