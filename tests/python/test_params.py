@@ -35,6 +35,8 @@ def test_every_parameter_is_a_cli_option_with_the_same_default(cli):
         shown = options[name]
         if shown is None:  # a flag, or an option without a shown default
             assert value in (False, 0), name
+        elif isinstance(value, bool):  # an on|off option, such as --flatten
+            assert shown == ("on" if value else "off"), name
         elif isinstance(value, str):
             assert value == shown, name
         else:
@@ -55,6 +57,17 @@ def test_parameters_change_the_result(ball):
     one = fluidsurf.reconstruct(ball, R, threads=1)
     many = fluidsurf.reconstruct(ball, R, threads=2)
     np.testing.assert_array_equal(one.vertices, many.vertices)
+
+
+def test_flatten_moves_the_points_of_flat_fluid_only():
+    slab = fluidsurf.generate("slab", count=20000, radius=R, layers=6, jitter=0.3)["positions"]
+    flat = fluidsurf.reconstruct(slab, R)
+    unflattened = fluidsurf.reconstruct(slab, R, flatten=False)
+    np.testing.assert_array_equal(flat.triangles, unflattened.triangles)
+    moved = np.linalg.norm(flat.vertices - unflattened.vertices, axis=1)
+    assert moved.max() > 0.05 * R
+    # (0.4 voxel of flattening where the smoothing had 0.2, the volume offset on top)
+    assert moved.max() < 0.6 * R
 
 
 def test_radii_and_the_radius_choice(ball):
@@ -87,6 +100,8 @@ def test_radii_and_the_radius_choice(ball):
         ({"field": "yt10", "iso_level": 1.5}, ValueError, "iso level must be in (0, 1)"),
         ({"decimate": 1.0}, ValueError, "decimate must be a fraction in [0, 1) or 'off'"),
         ({"raw": True, "smooth": 3}, ValueError, "raw=True excludes"),
+        ({"raw": True, "flatten": False}, ValueError, "raw=True excludes"),
+        ({"flatten": "off"}, TypeError, "flatten must be True or False (got str)"),
         ({"voxels": 1.0}, TypeError, "unknown parameter 'voxels' (known: voxel=1.0, "),
         ({"t_low": 4.0}, ValueError, "t_low must be smaller than t_high"),
         ({"device": "tpu"}, ValueError, "tpu"),

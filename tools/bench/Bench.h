@@ -5,6 +5,7 @@
 
 #include <fluidsurf/Params.h>
 #include <fluidsurf/ParticleSet.h>
+#include <fluidsurf/Scenes.h>
 
 #include <algorithm>
 #include <chrono>
@@ -97,6 +98,8 @@ struct QualityBenchOptions
     std::string scenes = "real,large";                 ///< the volume rows
     std::string field = "ssp07";                       ///< our rows' field (Params::field)
     int smooth = PostProcessParams().smooth;           ///< our default rows' rounds of smoothing
+    bool flatten = PostProcessParams().flatten;        ///< our default rows' flattening
+    uint64_t seed = SceneParams().seed;                ///< the slab's jitter
     double radiusScale = Params().radiusScale;         ///< our rows' Params::radiusScale
     double anisotropyRatio = Params().anisotropyRatio; ///< our rows' Params::anisotropyRatio
     std::string volume = volumeTargetName(PostProcessParams().volume); ///< our default rows'

@@ -101,6 +101,7 @@ ReconstructParams defaultParams(const QualityBenchOptions& o, double r)
     p.field.radiusScale = o.radiusScale;
     p.field.anisotropyRatio = o.anisotropyRatio;
     p.post.smooth = o.smooth;
+    p.post.flatten = o.flatten;
     p.post.volume = volumeTargetFromName(o.volume);
     return p;
 }
@@ -120,21 +121,22 @@ int runQualityBench(const QualityBenchOptions& o)
     const bool peer = !o.splashsurf.empty();
     std::printf(
         "fluidsurf_bench quality: field %s, radius scale %g, anisotropy ratio %g, %d rounds "
-        "of smoothing; voxel = r, R = 4r (our defaults)%s\n\n",
-        o.field.c_str(), o.radiusScale, o.anisotropyRatio, o.smooth,
+        "of smoothing, flattening %s; voxel = r, R = 4r (our defaults)%s\n\n",
+        o.field.c_str(), o.radiusScale, o.anisotropyRatio, o.smooth, o.flatten ? "on" : "off",
         peer ? "; splashsurf in the same run: smoothed `-l 2.0 -c 1.0 -t 0.6 "
                "--mesh-smoothing-weights=on --mesh-smoothing-iters=25 --mesh-cleanup=on`, "
                "raw `-l 2.0 -c 1.0 -t 0.6`"
              : "");
-    std::printf("**Flat fluid**: `generate slab -n %zu -r %g --layers %d --jitter J`, the top face "
-                "over the middle 60%% across: RMS of vertex heights about their mean, mean normal "
-                "deviation (degrees), triangles of the whole mesh\n\n",
-                o.count, o.radius, o.layers);
+    std::printf("**Flat fluid**: `generate slab -n %zu -r %g --layers %d --jitter J --seed %llu`, "
+                "the top face over the middle 60%% across: RMS of vertex heights about their mean, "
+                "mean normal deviation (degrees), triangles of the whole mesh\n\n",
+                o.count, o.radius, o.layers, (unsigned long long)o.seed);
     std::printf("| J | mesh | RMS height | normal deviation | triangles | RMS / splashsurf | "
                 "deviation / splashsurf |\n|---|---|---|---|---|---|---|\n");
     for (const std::string& j : split(o.jitters)) {
         SceneParams sp;
         sp.count = o.count, sp.radius = o.radius, sp.layers = o.layers, sp.jitter = std::stod(j);
+        sp.seed = o.seed;
         const ParticleSet slab = generateScene(Scene::Slab, sp);
         Flatness base;
         if (peer) base = topFace(splashsurf(o, slab, o.radius, kSplashSmooth), slab);

@@ -205,6 +205,13 @@ void addPostOptions(CLI::App* cmd, PipelineOptions& o)
                                     "particles' bumps on flat fluid; 0 to 100, 0 for none")
                         ->capture_default_str()
                         ->check(CLI::Range(0, 100)));
+    steps.push_back(cmd->add_option("--flatten", p.flatten,
+                                    "on or off: the smoothing then flattens flat fluid (plain "
+                                    "Laplacian steps where the surface is flat over several "
+                                    "voxels, none where it curves; no point moving more than "
+                                    "0.4 voxel, volumes kept); needs --smooth above 0")
+                        ->default_str("on")
+                        ->check(CLI::IsMember({"on", "off"})));
     steps.push_back(cmd->add_option("--subdivide", p.subdivide,
                                     "Loop subdivision steps last (each 4x the triangles; rounds "
                                     "off the edges decimation leaves); 0 to 3")

@@ -167,6 +167,9 @@ const std::vector<Entry>& table()
         FS_REAL("decimate_error", kPost, post.decimateError, nonNegative),
         FS_CHOICE("decimator", kPost, post.decimator, decimatorFromName, decimatorName),
         FS_INT("smooth", kPost, post.smooth, 0, 100),
+        Entry{"flatten", kPost,
+              [](Settings& s, py::handle v) { s.params.post.flatten = flag("flatten", v); },
+              [](const Settings& s) -> py::object { return py::bool_(s.params.post.flatten); }},
         FS_INT("subdivide", kPost, post.subdivide, 0, 3),
         Entry{"raw", kPost, [](Settings& s, py::handle v) { s.raw = flag("raw", v); },
               [](const Settings& s) -> py::object { return py::bool_(s.raw); }},
@@ -210,10 +213,11 @@ Settings settingsFrom(const py::kwargs& kwargs, unsigned groups)
     }
     if (s.raw) {
         if (kwargs.contains("decimate") || kwargs.contains("decimate_error") ||
-            kwargs.contains("smooth") || kwargs.contains("subdivide") ||
-            kwargs.contains("decimator") || kwargs.contains("volume"))
+            kwargs.contains("smooth") || kwargs.contains("flatten") ||
+            kwargs.contains("subdivide") || kwargs.contains("decimator") ||
+            kwargs.contains("volume"))
             throw ValueError("raw=True excludes decimate, decimate_error, decimator, smooth, "
-                             "subdivide and volume");
+                             "flatten, subdivide and volume");
         PostProcessParams& p = s.params.post;
         p.decimate = 0, p.decimateError = 0, p.smooth = 0, p.subdivide = 0;
     }

@@ -75,6 +75,13 @@ struct PostProcessParams
     /// the particles' bumps on flat fluid (it keeps shapes), and one Loop step only halves
     /// them; this takes them out. 0 for none (0 to 100).
     int smooth = 6;
+    /// With smooth > 0, the smoothing then flattens flat fluid (ours, issue 64): plain
+    /// Laplacian steps where the surface is flat at the scale of several voxels, none where it
+    /// curves (droplets, sheets, tips, corners), what they move a region as a whole given back,
+    /// each point held within 0.4 voxel. The particles' jitter leaves bumps several voxels wide
+    /// on flat water that Taubin's rounds barely touch; with this a jittered slab's top comes
+    /// out flatter than splashsurf 0.14's smoothed mesh (BENCHMARKS.md).
+    bool flatten = true;
     /// Loop subdivision steps after decimation, each 4x the triangles, rounding off the edges
     /// that decimation leaves (0 to 3).
     int subdivide = 1;
