@@ -205,7 +205,11 @@ expect_error "reconstruct --decimate must be a fraction or off" "a fraction of t
 expect_error "reconstruct --decimate 1 removes everything: refused" "decimation fraction" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --decimate 1
 expect_error "openmesh takes no error bound" "takes no error bound" "$BIN" post "$T/drop.obj" -o "$T/bad.obj" --decimator openmesh --decimate-error 0.5
 expect_error "--raw leaves out every step: no step options with it" "excludes --raw" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --raw --smooth 3
+expect_error "--flatten takes on or off" "--flatten: maybe not in {on,off}" "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/bad.obj" --flatten maybe
 check "nothing written for refused options" test ! -e "$T/bad.obj"
+"$BIN" reconstruct "$T/slab.bgeo" -r 0.01 -o "$T/slab_flat.obj" -q
+"$BIN" reconstruct "$T/slab.bgeo" -r 0.01 -o "$T/slab_unflat.obj" -q --flatten off
+check "reconstruct --flatten off: other points, the same triangles, both closed and oriented" bash -c "! cmp -s '$T/slab_flat.obj' '$T/slab_unflat.obj' && diff <(grep '^f ' '$T/slab_flat.obj') <(grep '^f ' '$T/slab_unflat.obj') >/dev/null && /usr/bin/python3 '$T/objcheck.py' '$T/slab_flat.obj' >/dev/null && /usr/bin/python3 '$T/objcheck.py' '$T/slab_unflat.obj' >/dev/null"
 head -c 3000 "$T/drop.obj" >"$T/cut_mesh.obj"
 expect_error "post: a cut OBJ is one error, no output" "cut_mesh.obj" "$BIN" post "$T/cut_mesh.obj" -o "$T/cut_post.obj"
 check "post: nothing written for the cut OBJ" test ! -e "$T/cut_post.obj"

@@ -3,6 +3,7 @@
 // patches only within their plane, leaves open borders and non-manifold spots as they were,
 // respects an error bound, and gives the same bits for any thread count.
 #include "post/Decimate.h"
+#include "GridMesh.h"
 #include "post/IsolatedSpheres.h"
 
 #include <fluidsurf/MeshCheck.h>
@@ -35,17 +36,7 @@ TriangleMesh dropSurface(size_t count)
 /// An n x n grid of unit squares in z = 0, each cut along a diagonal: an open flat patch.
 TriangleMesh flatGrid(uint32_t n)
 {
-    TriangleMesh m;
-    for (uint32_t j = 0; j <= n; ++j)
-        for (uint32_t i = 0; i <= n; ++i)
-            m.points.emplace_back(float(i), float(j), 0.f);
-    for (uint32_t j = 0; j < n; ++j)
-        for (uint32_t i = 0; i < n; ++i) {
-            const uint32_t a = j * (n + 1) + i;
-            m.triangles.push_back({a, a + 1, a + n + 2});
-            m.triangles.push_back({a, a + n + 2, a + n + 1});
-        }
-    return m;
+    return test::gridMesh(n, [](uint32_t, uint32_t) { return 0.0; });
 }
 
 TEST(Decimate, SphereKeepsItsShapeAtAQuarterOfTheTriangles)

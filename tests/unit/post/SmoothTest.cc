@@ -4,6 +4,7 @@
 // that Taubin's rounds leave are taken out of a flat sheet, a small curved body is left to
 // Taubin's rounds alone, a large one keeps its volume.
 #include "post/Smooth.h"
+#include "GridMesh.h"
 #include "post/IsolatedSpheres.h"
 
 #include <fluidsurf/MeshCheck.h>
@@ -79,18 +80,10 @@ TEST(Smooth, OpenBorderStaysAndTheInsideFlattens)
 {
     // a 16 x 16 grid of unit squares in z = 0 with its inner points raised or lowered by 0.1
     const uint32_t n = 16;
-    TriangleMesh m;
-    for (uint32_t j = 0; j <= n; ++j)
-        for (uint32_t i = 0; i <= n; ++i) {
-            const bool border = i == 0 || j == 0 || i == n || j == n;
-            m.points.emplace_back(float(i), float(j), border ? 0.f : (i + j) % 2 ? 0.1f : -0.1f);
-        }
-    for (uint32_t j = 0; j < n; ++j)
-        for (uint32_t i = 0; i < n; ++i) {
-            const uint32_t a = j * (n + 1) + i;
-            m.triangles.push_back({a, a + 1, a + n + 2});
-            m.triangles.push_back({a, a + n + 2, a + n + 1});
-        }
+    const TriangleMesh m = test::gridMesh(n, [&](uint32_t i, uint32_t j) {
+        const bool border = i == 0 || j == 0 || i == n || j == n;
+        return border ? 0.0 : (i + j) % 2 ? 0.1 : -0.1;
+    });
     const TriangleMesh s = post::smoothAlongNormals(m, 6, 0.5);
     double before = 0, after = 0;
     for (uint32_t j = 0; j <= n; ++j)
@@ -115,23 +108,12 @@ TriangleMesh wavySheet(double a)
 {
     const uint32_t n = 64;
     const double k = 2 * M_PI / 8;
-    TriangleMesh m;
-    for (uint32_t j = 0; j <= n; ++j)
-        for (uint32_t i = 0; i <= n; ++i) {
-            const uint32_t v = j * (n + 1) + i;
-            const double jitter = 0.02 * (double((v * 2654435761u) % 1000) / 999.0 - 0.5);
-            const bool border = i == 0 || j == 0 || i == n || j == n;
-            m.points.emplace_back(float(i), float(j),
-                                  border ? 0.f
-                                         : float(a * std::sin(k * i) * std::sin(k * j) + jitter));
-        }
-    for (uint32_t j = 0; j < n; ++j)
-        for (uint32_t i = 0; i < n; ++i) {
-            const uint32_t a0 = j * (n + 1) + i;
-            m.triangles.push_back({a0, a0 + 1, a0 + n + 2});
-            m.triangles.push_back({a0, a0 + n + 2, a0 + n + 1});
-        }
-    return m;
+    return test::gridMesh(n, [&](uint32_t i, uint32_t j) {
+        const uint32_t v = j * (n + 1) + i;
+        const double jitter = 0.02 * (double((v * 2654435761u) % 1000) / 999.0 - 0.5);
+        const bool border = i == 0 || j == 0 || i == n || j == n;
+        return border ? 0.0 : a * std::sin(k * i) * std::sin(k * j) + jitter;
+    });
 }
 
 post::SmoothParams flattening(double voxel, double maxMove, double flatMove)
