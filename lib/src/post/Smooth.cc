@@ -34,16 +34,20 @@ constexpr double kLambda = 0.5, kMu = -0.5;
 
 // The flattening (Smooth.h), measured on a jittered slab (J = 0.2-0.4, `fluidsurf_bench
 // quality`) and the real frames (BENCHMARKS.md, issue 64): fewer flat steps leave the slab's top
-// bumpier (40: 0.79x splashsurf's at J = 0.4, 60: 0.77x, 80: 0.76x); a longer low pass for the
-// slow part gives back less of a curved body's volume (hilbert: 20 steps 0.885 of N (2r)^3, 40:
-// 0.875), a shorter one more of the bumps (10: the slab 0.97x at J = 0.4). With 10 steps on
-// the curvature's copy, the jitter still curved parts of the slab's top (seed 3: 0.96x at
-// J = 0.4; 20 steps: 0.76x).
-constexpr int kFlatSteps = 60; ///< plain Laplacian steps on the flat regions
-constexpr int kSlowSteps = 20; ///< averaging steps that take the slow part of their moves
-/// flat steps per new set of normals: a flat region's normals turn little in a step (the same
-/// slab and frames' figures to 0.01x every 6 steps; never again after the first: 0.95x at J = 0.4),
-/// and the normals were 60% of the flat steps' time (1.7M frame, 2 cores: 0.48 -> 0.30 s)
+// bumpier (at lambda 0.5: 40 steps 0.79x splashsurf's at J = 0.4, 60: 0.77x, 80: 0.76x); a
+// longer low pass for the slow part gives back less of a curved body's volume (hilbert: 20 steps
+// 0.885 of N (2r)^3, 40: 0.875), a shorter one more of the bumps (10: the slab 0.97x at
+// J = 0.4). With 10 steps on the curvature's copy, the jitter still curved parts of the slab's
+// top (seed 3: 0.96x at J = 0.4; 20 steps: 0.76x). The flat steps take lambda 0.9 (a plain
+// Laplacian step's transfer 1 - lambda k stays within (-1, 1] for the umbrella's k in [0, 2]):
+// 34 of them do what 60 at 0.5 did (the same figures to 0.01x) in 0.41 s of smoothing on the
+// 1.7M frame instead of 0.50.
+constexpr int kFlatSteps = 34;      ///< plain Laplacian steps on the flat regions
+constexpr double kFlatLambda = 0.9; ///< their factor
+constexpr int kSlowSteps = 20;      ///< averaging steps that take the slow part of their moves
+/// flat steps per new set of normals: a flat region's normals turn little in a step (at lambda
+/// 0.5 the same slab and frames' figures to 0.01x every 6 steps; never again after the first:
+/// 0.95x at J = 0.4), and the normals were 60% of the flat steps' time
 constexpr int kNormalSteps = 4;
 constexpr int kShapeSteps = 20;  ///< plain Laplacian steps on the copy the curvature is taken on
 constexpr int kFeatureRings = 2; ///< rings over which a curved point keeps its neighbours still
@@ -133,9 +137,9 @@ Vec3d within(const Vec3d& at, const Vec3d& to, double bound)
 /// from its neighbours' mean, then held within bound(v) of from[v]; p becomes the result.
 template <typename Factor, typename Bound>
 void stepAlongNormals(const Rings& rings, AreaNormals& normals, const Points& from, Points& p,
-                      Points& next, const Factor& factor, const Bound& bound, bool fresh = true)
+                      Points& next, const Factor& factor, const Bound& bound)
 {
-    if (fresh) normals.compute(p.data());
+    normals.compute(p.data());
     forEachPoint(p.size(), [&](size_t v) {
         next[v] = p[v];
         Vec3d n;
@@ -276,11 +280,29 @@ void flatten(const TriangleMesh& mesh, const Rings& rings, AreaNormals& normals,
         return params.maxMove + (params.flatMove - params.maxMove) * weight[v] * weight[v];
     };
     Points start(nv);
-    forEachPoint(nv, [&](size_t v) { start[v] = p[v]; });
-    for (int step = 0; step < kFlatSteps; ++step)
-        stepAlongNormals(
-            rings, normals, from, p, next, [&](size_t v) { return kLambda * weight[v]; }, bound,
-            step % kNormalSteps == 0);
+    forEachPoint(nv, [&](size_t v) { start[v] = next[v] = p[v]; });
+    // the steps visit only the points they move (weight > 0), each with its own normal from its
+    // own triangles (areaNormal: the bits AreaNormals gives): the rest stay the same in both
+    // buffers
+    std::vector<uint32_t> active;
+    for (size_t v = 0; v < nv; ++v)
+        if (weight[v] > 0 && rings.moves(v)) active.push_back(uint32_t(v));
+    Points normal(active.size());
+    for (int step = 0; step < kFlatSteps; ++step) {
+        const bool fresh = step % kNormalSteps == 0;
+        forEachPoint(active.size(), [&](size_t k) {
+            const uint32_t v = active[k];
+            if (fresh) normal[k] = areaNormal(p.data(), mesh, rings.corners, v);
+            next[v] = p[v];
+            const double len = normal[k].length();
+            if (!(len > 0)) return;
+            const Vec3d n = normal[k] / len;
+            const Vec3d moved =
+                p[v] + n * (kFlatLambda * weight[v] * n.dot(rings.mean(p.data(), v) - p[v]));
+            next[v] = within(moved, from[v], bound(v));
+        });
+        std::swap(p, next);
+    }
     // the slow part of the moves (a low pass: each step the mean of a point's move and its
     // neighbours' mean move), given back in the share the point moved
     Points moved(nv);
