@@ -90,10 +90,11 @@ constexpr double kSmoothMove = 0.2;    ///< a point, over all rounds of smoothin
 /// a point on flat fluid, over the smoothing and its flattening (post/Smooth.h; a point
 /// between flat and curved: 0.2 + 0.2 w^2 for its weight w). The particles' jitter leaves bumps
 /// of 0.3-0.5 voxel there: a jittered slab at J = 0.4 came out 0.82-0.87x as bumpy as
-/// splashsurf's smoothed mesh with 0.35, 0.53-0.77x with 0.4 (six seeds). Flattening them moves
-/// the surface that far from the raw mesh: the large frames' meshes lie up to 0.61 voxel from
-/// their raw ones (0.53 with 0.3, 0.45 with 0.2; 0.43 without flattening), the small real
-/// frames' up to 0.45 (the steps' half voxel holds with flatten off; PostProcessTest).
+/// splashsurf's smoothed mesh with 0.35, 0.53-0.77x with 0.4 (six seeds; before the flat steps
+/// took flat neighbours only). Flattening them moves the surface that far from the raw mesh:
+/// the large frames' meshes lie up to 0.62 voxel from their raw ones (0.53 with 0.3, 0.45 with
+/// 0.2; 0.43 without flattening), the small real frames' up to 0.48 (the steps' half voxel
+/// holds with flatten off; PostProcessTest).
 constexpr double kFlatMove = 0.4;
 constexpr double kLoopMove = 0.1; ///< a point, in one Loop step
 /// The most a component is offset to give its volume back (post/Volumes.h): what the steps'

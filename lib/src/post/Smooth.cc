@@ -34,17 +34,19 @@ constexpr double kLambda = 0.5, kMu = -0.5;
 
 // The flattening (Smooth.h), measured on a jittered slab (J = 0.2-0.4, `fluidsurf_bench
 // quality`) and the real frames (BENCHMARKS.md, issue 64): fewer flat steps leave the slab's top
-// bumpier (at lambda 0.5: 40 steps 0.79x splashsurf's at J = 0.4, 60: 0.77x, 80: 0.76x); a
-// longer low pass for the slow part gives back less of a curved body's volume (hilbert: 20 steps
-// 0.885 of N (2r)^3, 40: 0.875), a shorter one more of the bumps (10: the slab 0.97x at
-// J = 0.4). With 10 steps on the curvature's copy, the jitter still curved parts of the slab's
-// top (seed 3: 0.96x at J = 0.4; 20 steps: 0.76x). The flat steps take lambda 0.9 (a plain
-// Laplacian step's transfer 1 - lambda k stays within (-1, 1] for the umbrella's k in [0, 2]):
-// 34 of them do what 60 at 0.5 did (the same figures to 0.01x) in 0.41 s of smoothing on the
-// 1.7M frame instead of 0.50.
+// bumpier (at lambda 0.5: 40 steps 0.79x splashsurf's at J = 0.4, 60: 0.77x, 80: 0.76x). The
+// slow part's low pass: with the flat steps pulled by curved neighbours too, 20 steps (a longer
+// one gave a curved body back less of its volume: hilbert 0.875 of N (2r)^3 at 40); with flat
+// neighbours only (flatMean below), no border sag is left to give back, and a longer pass gives
+// back less of the jitter's long waves: J = 0.4 at 0.57x with 80 steps (0.60x with 60, 0.76x
+// with 20), a 4-layer slab 0.66-0.82x (was 0.84-0.97x), hilbert still 0.885. With 10 steps on
+// the curvature's copy, the jitter still curved parts of the slab's top (seed 3: 0.96x at
+// J = 0.4; 20 steps: 0.76x). The flat steps take lambda 0.9 (a plain Laplacian step's transfer
+// 1 - lambda k stays within (-1, 1] for the umbrella's k in [0, 2]): 34 of them do what 60 at
+// 0.5 did (the same figures to 0.01x), in less time.
 constexpr int kFlatSteps = 34;      ///< plain Laplacian steps on the flat regions
 constexpr double kFlatLambda = 0.9; ///< their factor
-constexpr int kSlowSteps = 20;      ///< averaging steps that take the slow part of their moves
+constexpr int kSlowSteps = 80;      ///< averaging steps that take the slow part of their moves
 /// flat steps per new set of normals: a flat region's normals turn little in a step (at lambda
 /// 0.5 the same slab and frames' figures to 0.01x every 6 steps; never again after the first:
 /// 0.95x at J = 0.4), and the normals were 60% of the flat steps' time
@@ -288,6 +290,19 @@ void flatten(const TriangleMesh& mesh, const Rings& rings, AreaNormals& normals,
     for (size_t v = 0; v < nv; ++v)
         if (weight[v] > 0 && rings.moves(v)) active.push_back(uint32_t(v));
     Points normal(active.size());
+    // the mean of a point's flat neighbours only (weight > 0): a flat region does not feel the
+    // curved points around it, which lie below its plane where it ends in a rounded edge and
+    // would drag its border down (a sag that the slow part then had to give back, with the
+    // jitter's long waves)
+    auto flatMean = [&](uint32_t v) {
+        Vec3d sum(0.0);
+        uint32_t count = 0;
+        for (uint32_t i = 0; i < rings.count[v]; ++i) {
+            const uint32_t u = rings.around(v)[i];
+            if (weight[u] > 0) sum += p[u], ++count;
+        }
+        return count ? sum / double(count) : p[v];
+    };
     for (int step = 0; step < kFlatSteps; ++step) {
         const bool fresh = step % kNormalSteps == 0;
         forEachPoint(active.size(), [&](size_t k) {
@@ -297,8 +312,7 @@ void flatten(const TriangleMesh& mesh, const Rings& rings, AreaNormals& normals,
             const double len = normal[k].length();
             if (!(len > 0)) return;
             const Vec3d n = normal[k] / len;
-            const Vec3d moved =
-                p[v] + n * (kFlatLambda * weight[v] * n.dot(rings.mean(p.data(), v) - p[v]));
+            const Vec3d moved = p[v] + n * (kFlatLambda * weight[v] * n.dot(flatMean(v) - p[v]));
             next[v] = within(moved, from[v], bound(v));
         });
         std::swap(p, next);
