@@ -135,20 +135,18 @@ Vec3d within(const Vec3d& at, const Vec3d& to, double bound)
     return dist > bound ? to + offset * (bound / dist) : at;
 }
 
-/// One step along the normals of every moving point: p[v] moved by factor(v) of its offset
-/// from its neighbours' mean, then held within bound(v) of from[v]; p becomes the result.
-template <typename Factor, typename Bound>
+/// One Taubin step along the normals of every moving point: p[v] moved by factor of its offset
+/// from its neighbours' mean, then held within bound of from[v]; p becomes the result.
 void stepAlongNormals(const Rings& rings, AreaNormals& normals, const Points& from, Points& p,
-                      Points& next, const Factor& factor, const Bound& bound)
+                      Points& next, double factor, double bound)
 {
     normals.compute(p.data());
     forEachPoint(p.size(), [&](size_t v) {
         next[v] = p[v];
         Vec3d n;
-        const double f = factor(v);
-        if (!rings.moves(v) || f == 0 || !unitNormal(normals, v, n)) return;
-        const Vec3d moved = p[v] + n * (f * n.dot(rings.mean(p.data(), v) - p[v]));
-        next[v] = within(moved, from[v], bound(v));
+        if (!rings.moves(v) || !unitNormal(normals, v, n)) return;
+        const Vec3d moved = p[v] + n * (factor * n.dot(rings.mean(p.data(), v) - p[v]));
+        next[v] = within(moved, from[v], bound);
     });
     std::swap(p, next);
 }
@@ -288,7 +286,7 @@ void flatten(const TriangleMesh& mesh, const Rings& rings, AreaNormals& normals,
     // buffers
     std::vector<uint32_t> active;
     for (size_t v = 0; v < nv; ++v)
-        if (weight[v] > 0 && rings.moves(v)) active.push_back(uint32_t(v));
+        if (weight[v] > 0) active.push_back(uint32_t(v)); // (border points weigh 0)
     Points normal(active.size());
     // the mean of a point's flat neighbours only (weight > 0): a flat region does not feel the
     // curved points around it, which lie below its plane where it ends in a rounded edge and
@@ -349,9 +347,7 @@ TriangleMesh smoothAlongNormals(TriangleMesh mesh, const SmoothParams& params)
     forEachPoint(nv, [&](size_t v) { from[v] = p[v] = toVec3d(mesh.points[v]); });
     for (int step = 0; step < 2 * params.rounds; ++step) {
         const double f = step % 2 ? kMu : kLambda;
-        stepAlongNormals(
-            rings, normals, from, p, next, [&](size_t) { return f; },
-            [&](size_t) { return params.maxMove; });
+        stepAlongNormals(rings, normals, from, p, next, f, params.maxMove);
     }
     if (flat) flatten(mesh, rings, normals, from, p, next, params);
     forEachPoint(nv, [&](size_t v) { mesh.points[v] = toVec3f(p[v]); });

@@ -20,13 +20,13 @@ struct SmoothParams
     /// Then flatten the flat regions (ours, issue 64). Taubin's pair barely touches bumps
     /// several voxels wide (its transfer is 1 - k^2/4 for a Laplacian eigenvalue k), and those
     /// are what is left of the particles' jitter on flat fluid. So: plain Laplacian steps along
-    /// the normals, at full weight where the surface is flat at the scale of several voxels
-    /// (its curvature, taken on a copy that plain Laplacian steps have smoothed, below
-    /// 1/(33 voxels) over two rings), none where it passes 1/(12.5 voxels), linear between.
-    /// Plain Laplacian steps also shrink a curved body as a whole; that slow part of what they
-    /// moved is given back, so that the bumps go and the body stays. A flat point stays within
-    /// flatMove of where it started, a point of weight w within maxMove + (flatMove - maxMove)
-    /// w^2. voxel: the unit of the curvatures.
+    /// the normals towards the mean of a point's flat neighbours, at full weight where the surface
+    /// is flat at the scale of several voxels (its curvature, taken on a copy that plain Laplacian
+    /// steps have smoothed, below 1/(33 voxels) over two rings), none where it passes 1/(12.5
+    /// voxels), linear between. Plain Laplacian steps also shrink a curved body as a whole; that
+    /// slow part of what they moved is given back, so that the bumps go and the body stays. A flat
+    /// point stays within flatMove of where it started, a point of weight w within maxMove +
+    /// (flatMove - maxMove) w^2. voxel: the unit of the curvatures.
     bool flatten = false;
     double flatMove = 0;
     double voxel = 0;
