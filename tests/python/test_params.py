@@ -1,4 +1,5 @@
 # test_params.py - keyword parameters: the CLI's names and defaults, their effect, and refusals.
+import os
 import re
 import subprocess
 
@@ -70,6 +71,24 @@ def test_flatten_moves_the_points_of_flat_fluid_only():
     assert moved.max() < 0.6 * R
 
 
+def test_cover_moves_points_over_the_centres_left_outside():
+    frame = os.path.join(os.path.dirname(__file__), "../../../shared/data/real",
+                         "double_dam_break_frame_26_4732_particles.vtk")
+    if not os.path.exists(frame):
+        pytest.skip("../shared/data/real is absent")
+    positions = fluidsurf.read_particles(frame)["positions"]
+    r = 0.025
+    covered = fluidsurf.reconstruct(positions, r)
+    open_ = fluidsurf.reconstruct(positions, r, cover=False)
+    assert covered.info["covered_particles"] > 0
+    assert open_.info["covered_particles"] == 0
+    np.testing.assert_array_equal(covered.triangles, open_.triangles)
+    moved = np.linalg.norm(covered.vertices - open_.vertices, axis=1)
+    # bumps of at most a voxel and the margin (r here) near each centre; the rest stays
+    assert 0 < moved.max() < 2 * 1.1 * r
+    assert np.count_nonzero(moved) < 0.05 * len(moved)
+
+
 def test_radii_and_the_radius_choice(ball):
     given = fluidsurf.reconstruct(ball, R, raw=True)
     radii = np.full(len(ball), R, dtype=np.float32)
@@ -102,6 +121,8 @@ def test_radii_and_the_radius_choice(ball):
         ({"raw": True, "smooth": 3}, ValueError, "raw=True excludes"),
         ({"raw": True, "flatten": False}, ValueError, "raw=True excludes"),
         ({"flatten": "off"}, TypeError, "flatten must be True or False (got str)"),
+        ({"raw": True, "cover": False}, ValueError, "raw=True excludes"),
+        ({"cover": 0}, TypeError, "cover must be True or False (got int)"),
         ({"voxels": 1.0}, TypeError, "unknown parameter 'voxels' (known: voxel=1.0, "),
         ({"t_low": 4.0}, ValueError, "t_low must be smaller than t_high"),
         ({"device": "tpu"}, ValueError, "tpu"),

@@ -99,6 +99,7 @@ struct QualityBenchOptions
     std::string field = "ssp07";                       ///< our rows' field (Params::field)
     int smooth = PostProcessParams().smooth;           ///< our default rows' rounds of smoothing
     bool flatten = PostProcessParams().flatten;        ///< our default rows' flattening
+    bool cover = PostProcessParams().cover;            ///< our default rows' covering
     uint64_t seed = SceneParams().seed;                ///< the slab's jitter
     double radiusScale = Params().radiusScale;         ///< our rows' Params::radiusScale
     double anisotropyRatio = Params().anisotropyRatio; ///< our rows' Params::anisotropyRatio

@@ -134,6 +134,10 @@ int main(int argc, char** argv)
         ->capture_default_str();
     qualityCmd->add_option("--flatten", quality.flatten, "our default rows' flattening: on or off")
         ->default_str("on");
+    qualityCmd
+        ->add_option("--cover", quality.cover,
+                     "our default rows' covering of the centres left outside: on or off")
+        ->default_str("on");
     qualityCmd->add_option("--seed", quality.seed, "the slab's jitter seed")->capture_default_str();
     qualityCmd->add_option("--radius-scale", quality.radiusScale, "our rows' radius scale")
         ->capture_default_str();

@@ -161,6 +161,8 @@ void addPostCounts(const PostProcessStats& s, std::vector<std::pair<std::string,
     counts.push_back({"raw_triangles", double(s.inputTriangles)});
     counts.push_back({"decimated_triangles", double(s.decimatedTriangles)});
     counts.push_back({"decimate_error_voxels", s.decimateError});
+    counts.push_back({"covered_particles", double(s.coveredParticles)});
+    counts.push_back({"uncovered_particles", double(s.uncoveredParticles)});
 }
 
 /// --stats and -v counts of the adaptive mesher: triangles per level, crack patches and merged
@@ -386,6 +388,14 @@ Runner addReconstructCommand(CLI::App& app)
                         "holds 80-95% of it) or mesh (what marching cubes enclosed)")
             ->capture_default_str()
             ->check(CLI::IsMember({"mesh", "particles"})));
+    cmd->get_option("--raw")->excludes(
+        cmd->add_option("--cover", o->pipeline.params.post.cover,
+                        "on or off: the last step covers the particle centres the surface "
+                        "leaves outside (SSP07 pulls thin tips in past their last particles), "
+                        "each up to a voxel out, by a smooth bump 2.5 voxels wide that ends "
+                        "0.1 voxel past it; the rest of the surface does not move")
+            ->default_str("on")
+            ->check(CLI::IsMember({"on", "off"})));
     cmd->footer(
         "Examples:\n"
         "  fluidsurf reconstruct frame.bgeo -r 0.025 -o frame.obj\n"

@@ -176,6 +176,9 @@ const std::vector<Entry>& table()
         FS_CHOICE("isolated", kSpheres, post.isolated, isolatedModeFromName, isolatedModeName),
         FS_CHOICE("volume", kSpheres, post.volume, volumeTargetFromName, volumeTargetName),
         FS_REAL("sphere_deviation", kSpheres, post.sphereDeviation, positive),
+        Entry{"cover", kSpheres,
+              [](Settings& s, py::handle v) { s.params.post.cover = flag("cover", v); },
+              [](const Settings& s) -> py::object { return py::bool_(s.params.post.cover); }},
         Entry{"threads", kRun,
               [](Settings& s, py::handle v) {
                   s.threads = integer("threads", v, 0, Context::kMaxThreads);
@@ -215,9 +218,9 @@ Settings settingsFrom(const py::kwargs& kwargs, unsigned groups)
         if (kwargs.contains("decimate") || kwargs.contains("decimate_error") ||
             kwargs.contains("smooth") || kwargs.contains("flatten") ||
             kwargs.contains("subdivide") || kwargs.contains("decimator") ||
-            kwargs.contains("volume"))
+            kwargs.contains("volume") || kwargs.contains("cover"))
             throw ValueError("raw=True excludes decimate, decimate_error, decimator, smooth, "
-                             "flatten, subdivide and volume");
+                             "flatten, subdivide, volume and cover");
         PostProcessParams& p = s.params.post;
         p.decimate = 0, p.decimateError = 0, p.smooth = 0, p.subdivide = 0;
     }

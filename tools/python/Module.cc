@@ -91,6 +91,8 @@ PyMesh reconstructArrays(py::handle positions, double radius, py::handle radii,
     PyMesh out{std::move(res.mesh), py::dict(), std::move(res.vertexAttributes)};
     addFieldInfo(out.info, res.radius, res.field, res.isolatedParticles);
     out.info["isolated_spheres"] = res.isolatedSpheres;
+    out.info["covered_particles"] = res.post.coveredParticles;
+    out.info["uncovered_particles"] = res.post.uncoveredParticles;
     out.info["timing"] = ctx.timing().format();
     return out;
 }

@@ -41,13 +41,18 @@ enum class VolumeTarget {
 const char* volumeTargetName(VolumeTarget v);               ///< "mesh", "particles"
 VolumeTarget volumeTargetFromName(const std::string& name); ///< ValueError for unknown names
 
-/// The particles VolumeTarget::Particles counts (reconstruct() passes its own), world units.
+/// The particles a mesh was made from, for VolumeTarget::Particles and
+/// PostProcessParams::cover (reconstruct() passes its own), world units.
 struct ParticleVolumes
 {
     const Vec3f* positions = nullptr;
     const float* radii = nullptr; ///< per particle, or null for `radius`
     double radius = 0;
     size_t count = 0;
+    /// Particles the surface leaves out on purpose (the field's isolated ones, meshed as
+    /// spheres or dropped), ascending indices: not covered.
+    const uint32_t* isolated = nullptr;
+    size_t isolatedCount = 0;
 };
 
 /// Mesh post-processing (thesis chapter 5), in this order: decimation, smoothing (ours), Loop
@@ -90,6 +95,12 @@ struct PostProcessParams
     /// keeps its own volumes. On the real frames the particles' volume puts every frame's mesh
     /// closer to N (2r)^3 than splashsurf 0.14's (BENCHMARKS.md, issue 64).
     VolumeTarget volume = VolumeTarget::Particles;
+    /// With any step on and the particles known: the chain ends by covering the particle
+    /// centres the surface leaves outside (ours, issue 64). SSP07's f-term pulls a thin tip's
+    /// surface in past its last particles, by up to 0.7 r on the real frames. Each such centre,
+    /// up to a voxel out, gets a smooth bump of the surface around its nearest point (2.5 voxels
+    /// wide) that ends with it 0.1 voxel inside; the rest of the surface stays where it was.
+    bool cover = true;
     /// reconstruct() only (it has the particles). Spheres by default, as the thesis: a droplet
     /// is part of the fluid, and dropping it silently loses it from the mesh.
     IsolatedMode isolated = IsolatedMode::Spheres;
@@ -109,6 +120,9 @@ struct PostProcessStats
 {
     size_t inputTriangles = 0, decimatedTriangles = 0; ///< before and after decimation
     double decimateError = 0; ///< the largest collapse error made, in voxels (its square root)
+    /// PostProcessParams::cover: centres the bumps brought inside, and those left outside (over
+    /// a voxel out, or a bump would have folded the surface)
+    size_t coveredParticles = 0, uncoveredParticles = 0;
 };
 
 /// The surface steps of params on mesh, in order, each timed in ctx under the current scope;

@@ -204,6 +204,10 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
         const Attribute* a =
             params.field.perParticleRadii ? particles.find(AttributeRole::Radius) : nullptr;
         volumes.radii = a ? a->floats.data() : nullptr, volumes.radius = res.radius.radius;
+        std::vector<uint32_t> isolated = res.isolatedParticles; // (in index order, as a rule)
+        if (!std::is_sorted(isolated.begin(), isolated.end()))
+            std::sort(isolated.begin(), isolated.end());
+        volumes.isolated = isolated.data(), volumes.isolatedCount = isolated.size();
         res.mesh = postProcessMesh(std::move(res.mesh), post, ctx, &res.post, &volumes);
         if (params.post.isolated == IsolatedMode::Spheres && !res.isolatedParticles.empty()) {
             const auto t = ctx.scope("isolated spheres");

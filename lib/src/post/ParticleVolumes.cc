@@ -251,11 +251,9 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
     return out;
 }
 
-size_t useParticleVolumes(Components& c, const TriangleMesh& mesh,
-                          const std::vector<uint32_t>& ofPoint, const ParticleVolumes& particles,
-                          double cellSize)
+size_t useParticleVolumes(Components& c, const std::vector<uint32_t>& of,
+                          const ParticleVolumes& particles)
 {
-    const std::vector<uint32_t> of = componentsOfParticles(mesh, ofPoint, c, particles, cellSize);
     std::vector<double> sum(c.volume.size(), 0.0);
     for (size_t i = 0; i < of.size(); ++i) {
         if (of[i] == kNoComponent) continue;
@@ -266,6 +264,19 @@ size_t useParticleVolumes(Components& c, const TriangleMesh& mesh,
     for (size_t k = 0; k < sum.size(); ++k)
         if (sum[k] > 0) c.volume[k] = c.volume[k] > 0 ? sum[k] : -sum[k], ++changed;
     return changed;
+}
+
+std::vector<Vec3f> centresOutside(const std::vector<uint32_t>& of, const ParticleVolumes& particles)
+{
+    std::vector<Vec3f> out;
+    const uint32_t *skip = particles.isolated, *skipEnd = skip + particles.isolatedCount;
+    for (size_t i = 0; i < of.size(); ++i) {
+        while (skip != skipEnd && *skip < i)
+            ++skip;
+        if (of[i] != kNoComponent || (skip != skipEnd && *skip == i)) continue;
+        out.push_back(particles.positions[i]);
+    }
+    return out;
 }
 
 } // namespace post

@@ -25,11 +25,16 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                                             const Components& c, const ParticleVolumes& particles,
                                             double cellSize);
 
-/// c.volume of every component that holds a particle becomes its particles' volume, sum (2
-/// r_j)^3, added in the particles' order; returns how many components changed.
-size_t useParticleVolumes(Components& c, const TriangleMesh& mesh,
-                          const std::vector<uint32_t>& ofPoint, const ParticleVolumes& particles,
-                          double cellSize);
+/// c.volume of every component that holds a particle (`of`: componentsOfParticles') becomes its
+/// particles' volume, sum (2 r_j)^3, added in the particles' order; returns how many components
+/// changed.
+size_t useParticleVolumes(Components& c, const std::vector<uint32_t>& of,
+                          const ParticleVolumes& particles);
+
+/// The centres of the particles that `of` (componentsOfParticles') finds in no component, less
+/// particles.isolated (the field's own leaving-out), in the particles' order.
+std::vector<Vec3f> centresOutside(const std::vector<uint32_t>& of,
+                                  const ParticleVolumes& particles);
 
 } // namespace post
 } // namespace fluidsurf

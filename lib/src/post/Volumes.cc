@@ -170,7 +170,7 @@ void markClosed(Components& c, const TriangleMesh& mesh, const std::vector<uint3
 }
 
 void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Components& before,
-                    double maxOffset)
+                    double maxOffset, const VertexTriangles& around)
 {
     const size_t nv = mesh.points.size(), count = before.volume.size();
     ofPoint.resize(nv, kNoComponent);
@@ -209,10 +209,7 @@ void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Com
                 return a;
             });
         if (!pass.missing) break;
-        if (!pass.changed) { // not from those components after all: leave it
-            computeAngleWeightedNormals(mesh);
-            return;
-        }
+        if (!pass.changed) return; // not from those components after all: leave it
     }
     std::vector<double> volume, area;
     sums(mesh, ofPoint, count, volume, &area);
@@ -225,7 +222,6 @@ void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Com
     // cost no angles (the mesh's own, angle-weighted, come after the move). Kept in
     // mesh.normals meanwhile: fresh buffers the size of the mesh cost more in page faults here
     // than the sums in them.
-    const VertexTriangles around(mesh);
     util::resizeInParallel(mesh.normals, nv);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, nv), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t v = r.begin(); v != r.end(); ++v) {
@@ -240,7 +236,6 @@ void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Com
         for (size_t v = r.begin(); v != r.end(); ++v)
             mesh.points[v] = mesh.points[v] + mesh.normals[v];
     });
-    computeAngleWeightedNormals(mesh, around);
 }
 
 } // namespace post

@@ -5,6 +5,8 @@
 // component, back to the volumes their input enclosed.
 #pragma once
 
+#include "post/Normals.h"
+
 #include <fluidsurf/Mesh.h>
 
 #include <cstdint>
@@ -36,9 +38,10 @@ void markClosed(Components& c, const TriangleMesh& mesh, const std::vector<uint3
 /// kNoComponent for points the steps added, which get the component of a triangle neighbour):
 /// moves the points of each component that is closed in `before` along their normals by the
 /// one offset that gives back its old volume (to first order), at most maxOffset (world units).
-/// Ends the chain: mesh gets its angle-weighted normals (see Normals.h).
+/// around: mesh's vertex -> triangle table. Leaves mesh.normals as scratch: the chain's end
+/// computes them (see Normals.h).
 void restoreVolumes(TriangleMesh& mesh, std::vector<uint32_t> ofPoint, const Components& before,
-                    double maxOffset);
+                    double maxOffset, const VertexTriangles& around);
 
 } // namespace post
 } // namespace fluidsurf

@@ -1,5 +1,6 @@
 // TriangleDistance.h - the exact distance from a point to a triangle (or a segment), shared by
-// meshDistance and the decimation's guard on how far a collapse moves the surface.
+// meshDistance and the decimation's guard on how far a collapse moves the surface; and the
+// nearest point itself, for the step that covers the particles a surface misses.
 #pragma once
 
 #include "util/Vec3d.h"
@@ -30,6 +31,40 @@ inline double triangleDistance(const Vec3d& p, const Vec3d& a, const Vec3d& b, c
             return std::abs(h) * std::sqrt(n2);
     }
     return std::min({segmentDistance(p, a, b), segmentDistance(p, b, c), segmentDistance(p, c, a)});
+}
+
+/// The point of triangle (a, b, c) nearest p, as barycentric weights of a, b and c (Ericson,
+/// Real-Time Collision Detection, 5.1.5: p's region among the corners, sides and face).
+inline Vec3d nearestOnTriangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c)
+{
+    const Vec3d ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+    if (d1 <= 0 && d2 <= 0) return {1, 0, 0};
+    const Vec3d bp = p - b;
+    const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+    if (d3 >= 0 && d4 <= d3) return {0, 1, 0};
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+        const double v = d1 / (d1 - d3);
+        return {1 - v, v, 0};
+    }
+    const Vec3d cp = p - c;
+    const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+    if (d6 >= 0 && d5 <= d6) return {0, 0, 1};
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+        const double w = d2 / (d2 - d6);
+        return {1 - w, 0, w};
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return {0, 1 - w, w};
+    }
+    const double sum = va + vb + vc;
+    if (!(sum > 0)) return {1, 0, 0}; // degenerate: a corner will do
+    const double v = vb / sum, w = vc / sum;
+    return {1 - v - w, v, w};
 }
 
 /// A triangle set up for many questions "is p within a distance of it?" (the decimation's step

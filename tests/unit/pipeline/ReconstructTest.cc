@@ -186,8 +186,8 @@ TEST(Reconstruct, TimingTreeNestsTheStages)
     std::vector<std::string> post;
     for (size_t c : nodes[t.root().children[2]].children)
         post.push_back(nodes[c].name);
-    EXPECT_EQ(post, (std::vector<std::string>{"volumes", "particle volumes", "decimate", "smooth",
-                                              "subdivide", "volumes"}));
+    EXPECT_EQ(post, (std::vector<std::string>{"volumes", "decimate", "smooth", "particles inside",
+                                              "subdivide", "volumes", "cover particles"}));
     std::vector<std::string> inner;
     double sum = 0;
     for (size_t c : nodes[t.root().children[0]].children)
