@@ -36,11 +36,12 @@ struct CoverStats
 /// points of the surface sheet around q (connected to q's triangle within reach of the centre),
 /// within reach of q and facing the centre, move along q -> centre by the centre's depth plus the
 /// margin, times (1 - (d / reach)^2)^2 for their distance d from q: a smooth bump whose top
-/// passes the centre. Again from the new nearest point until the centre is inside (four bumps
+/// passes the centre. Again from the new nearest point until the centre is inside (six bumps
 /// at most); a bump that turns a triangle by more than 60 degrees, or does not get there, is
-/// taken back. The centres in their order, one after the other: the same bits for any thread
-/// count. around: mesh's vertex -> triangle table. Moves points only; leaves the normals as
-/// they were.
+/// taken back. Which centres need a bump is found on the mesh as it comes, all at once; the
+/// bumps then go in the centres' order where their surroundings share a triangle, at once where
+/// not: the same bits for any thread count. around: mesh's vertex -> triangle table. Moves
+/// points only; leaves the normals as they were.
 CoverStats coverParticles(TriangleMesh& mesh, const VertexTriangles& around,
                           const std::vector<Vec3f>& centres, const CoverParams& params);
 

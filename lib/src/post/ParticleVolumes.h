@@ -1,7 +1,8 @@
-// ParticleVolumes.h - PostProcessParams::volume = Particles: each closed component of the raw
-// mesh gets the volume of the particles inside it, sum_j (2 r_j)^3 (an SPH particle's share of
-// the fluid at rest), as the volume that post-processing's last step offsets it to (Volumes.h),
-// instead of the volume the raw mesh enclosed. SSP07's surface lies 0.87 r above a flat face's
+// ParticleVolumes.h - PostProcessParams::volume = Particles: each closed component of the mesh
+// gets the volume of the particles inside it (found once it is smoothed), sum_j (2 r_j)^3 (an SPH
+// particle's share of the fluid at rest), as the volume that post-processing's offset brings it
+// to (Volumes.h), instead of the volume the raw mesh enclosed; and PostProcessParams::cover: the
+// centres found in none (CoverParticles.h). SSP07's surface lies 0.87 r above a flat face's
 // centres and its f-correction pulls thin sheets in further, so the raw mesh encloses 80-95% of
 // the particles' volume on the real frames.
 #pragma once

@@ -105,7 +105,7 @@ constexpr double kVolumeOffset = 0.3;
 /// Covering the centres left outside (post/CoverParticles.h): each ends this far inside; the
 /// bump's radius; centres farther out are left. Measured outside the smoothed surface on the
 /// real frames: at most 0.53 voxel on the small ones, 0.84 on the large.
-constexpr double kCoverMargin = 0.1, kCoverReach = 2.5, kCoverDepth = 0.8;
+constexpr double kCoverMargin = 0.1, kCoverReach = 2.5, kCoverDepth = 1.0;
 
 double meanEdgeLength(const TriangleMesh& mesh)
 {
