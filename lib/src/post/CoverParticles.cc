@@ -299,11 +299,14 @@ Outcome bumpOver(TriangleMesh& mesh, Patch& patch, const Vec3d& p, Patch::Neares
 
 } // namespace
 
-CoverStats coverParticles(TriangleMesh& mesh, const VertexTriangles& around,
-                          const std::vector<Vec3f>& centres, const CoverParams& params)
+namespace {
+
+/// coverParticles for centres [first, last).
+CoverStats coverSome(TriangleMesh& mesh, const VertexTriangles& around, const Vec3f* first,
+                     const Vec3f* last, const CoverParams& params)
 {
     CoverStats st;
-    if (centres.empty() || mesh.triangles.empty()) return st;
+    const std::vector<Vec3f> centres(first, last);
     // every point a bump may move, and every triangle that may hold the nearest point
     const NearPoints near =
         pointsNear(mesh, centres, params.reach + params.maxDepth + params.margin);
@@ -370,6 +373,26 @@ CoverStats coverParticles(TriangleMesh& mesh, const VertexTriangles& around,
         });
     for (uint8_t o : outcome)
         st.covered += o == kCovered, st.left += o == kLeft || o == kFar;
+    return st;
+}
+
+} // namespace
+
+CoverStats coverParticles(TriangleMesh& mesh, const VertexTriangles& around,
+                          const std::vector<Vec3f>& centres, const CoverParams& params)
+{
+    CoverStats st;
+    if (mesh.triangles.empty()) return st;
+    // A few thousand centres out as a rule, about 100 points near each; a surface that misses
+    // most of a frame's centres (a level far from the default) must not take memory by the
+    // hundred points per particle: so many at a time.
+    constexpr size_t kCentres = 1 << 14;
+    for (size_t c = 0; c < centres.size(); c += kCentres) {
+        const size_t end = std::min(centres.size(), c + kCentres);
+        const CoverStats part =
+            coverSome(mesh, around, centres.data() + c, centres.data() + end, params);
+        st.covered += part.covered, st.left += part.left;
+    }
     return st;
 }
 

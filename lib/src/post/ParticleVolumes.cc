@@ -7,8 +7,13 @@
 // those that enter it say whether the particle is in the fluid; the closed components crossed an
 // odd number of times are those around it, and the first of them crossed, the innermost, holds
 // it (a droplet in a cavity of a pool is its own).
+#pragma GCC diagnostic ignored "-Wpsabi" // (the lane types never cross a call: see crossings)
+
 #include "post/ParticleVolumes.h"
 
+#include <fluidsurf/Error.h>
+
+#include "util/Lanes.h"
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
@@ -19,6 +24,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace fluidsurf {
@@ -136,13 +142,83 @@ Columns binTriangles(const TriangleMesh& mesh, double cellSize)
     return g;
 }
 
+/// The triangles across one column: each one's barycentric s and w and its crossing x as linear
+/// functions of the ray's (u, v), taken from the column's corner (small numbers, no cancellation
+/// far from the origin). Structure of arrays, padded to a multiple of 4 with planes no ray
+/// crosses (s = -1).
+struct ColumnPlanes
+{
+    enum : int { kSu, kSv, kS0, kWu, kWv, kW0, kXa, kXs, kXw, kFields };
+    std::vector<double> f[kFields];
+    std::vector<uint32_t> comp;
+    std::vector<int> sign;
+    size_t size = 0;
+
+    void clear()
+    {
+        for (auto& a : f)
+            a.clear();
+        comp.clear(), sign.clear(), size = 0;
+    }
+    void push(const std::array<double, kFields>& values, uint32_t component, int s)
+    {
+        for (int k = 0; k < kFields; ++k)
+            f[k].push_back(values[k]);
+        comp.push_back(component), sign.push_back(s), ++size;
+    }
+    void pad()
+    {
+        while (f[0].size() % 4)
+            for (int k = 0; k < kFields; ++k)
+                f[k].push_back(k == kS0 ? -1.0 : 0.0);
+    }
+};
+
+/// hit(k, x) for each plane k that the ray from (u, v, x0) along the axis crosses ahead (at
+/// x > x0), in the planes' order: the lanes of V (util::Doubles, util::WideDoubles) take
+/// consecutive planes, with the scalar test's operations in its order (the same bits), and the
+/// crossings, a few a ray, are handled one at a time.
+template <typename V, typename Hit>
+__attribute__((always_inline)) inline void crossings(const ColumnPlanes& p, double u, double v,
+                                                     double x0, Hit&& hit)
+{
+    constexpr size_t L = sizeof(V) / sizeof(double);
+    V f[ColumnPlanes::kFields]; // (no lambda: it would not be compiled for the caller's target)
+    for (size_t j = 0; j < p.f[0].size(); j += L) {
+        for (int k = 0; k < ColumnPlanes::kFields; ++k)
+            std::memcpy(&f[k], &p.f[k][j], sizeof f[k]);
+        const V s = f[ColumnPlanes::kSu] * u + f[ColumnPlanes::kSv] * v + f[ColumnPlanes::kS0],
+                w = f[ColumnPlanes::kWu] * u + f[ColumnPlanes::kWv] * v + f[ColumnPlanes::kW0];
+        const auto across = (s >= 0) & (w >= 0) & (s + w <= 1);
+        long long any = 0;
+        for (size_t l = 0; l < L; ++l)
+            any |= across[l];
+        if (!any) continue;
+        const V x = f[ColumnPlanes::kXa] + s * f[ColumnPlanes::kXs] + w * f[ColumnPlanes::kXw];
+        for (size_t l = 0; l < L; ++l)
+            if (across[l] && x[l] > x0) hit(j + l, x[l]);
+    }
+}
+
+template <typename Hit>
+__attribute__((target("avx2"))) void wideCrossings(const ColumnPlanes& p, double u, double v,
+                                                   double x0, Hit&& hit)
+{
+    crossings<util::WideDoubles>(p, u, v, x0, hit);
+}
+
 } // namespace
 
 std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                                             const std::vector<uint32_t>& ofPoint,
                                             const Components& c, const ParticleVolumes& particles,
-                                            double cellSize)
+                                            double cellSize, int lanes)
 {
+    if (lanes == 0) lanes = util::doubleRegisterLanes();
+    if (lanes != 2 && lanes != 4)
+        throw ValueError("componentsOfParticles: 2 or 4 doubles a register");
+    if (lanes > util::doubleRegisterLanes())
+        throw ValueError("componentsOfParticles: 4 doubles a register need a CPU with AVX2");
     std::vector<uint32_t> out(particles.count, kNoComponent);
     if (mesh.triangles.empty() || particles.count == 0) return out;
     const Columns g = binTriangles(mesh, cellSize);
@@ -174,15 +250,7 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
         for (size_t i = 0; i < particles.count; ++i)
             if (columnOf[i] != UINT32_MAX) sorted[fill[columnOf[i]]++] = uint32_t(i);
     }
-    /// A triangle across the column: its barycentric s and w and its crossing x as linear
-    /// functions of the ray's (u, v), taken from the column's corner (small numbers, no
-    /// cancellation far from the origin).
-    struct Plane
-    {
-        double su, sv, s0, wu, wv, w0, xa, xs, xw;
-        uint32_t comp;
-        int sign;
-    };
+    const bool wide = lanes == 4;
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, columns, 64), [&](const tbb::blocked_range<size_t>& r) {
             struct Crossing
@@ -192,7 +260,7 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                 double nearest;
             };
             std::vector<Crossing> crossed;
-            std::vector<Plane> planes;
+            ColumnPlanes planes;
             for (size_t col = r.begin(); col != r.end(); ++col) {
                 if (first[col] == first[col + 1] || g.start[col] == g.start[col + 1]) continue;
                 const double cu0 = g.u0 + double(int64_t(col) % g.nu) * g.cell,
@@ -208,13 +276,11 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                     const double n = ab[U] * ae[V] - ab[V] * ae[U]; // the normal along the ray
                     if (n == 0) continue;                           // edge-on to the ray
                     const double au = a[U] - cu0, av = a[V] - cv0;
-                    Plane pl;
-                    pl.su = ae[V] / n, pl.sv = -ae[U] / n, pl.s0 = (av * ae[U] - au * ae[V]) / n;
-                    pl.wu = -ab[V] / n, pl.wv = ab[U] / n, pl.w0 = (au * ab[V] - av * ab[U]) / n;
-                    pl.xa = a[A], pl.xs = ab[A], pl.xw = ae[A];
-                    pl.comp = comp, pl.sign = n > 0 ? 1 : -1;
-                    planes.push_back(pl);
+                    planes.push({ae[V] / n, -ae[U] / n, (av * ae[U] - au * ae[V]) / n, -ab[V] / n,
+                                 ab[U] / n, (au * ab[V] - av * ab[U]) / n, a[A], ab[A], ae[A]},
+                                comp, n > 0 ? 1 : -1);
                 }
+                planes.pad();
                 for (uint32_t at = first[col]; at < first[col + 1]; ++at) {
                     const size_t i = sorted[at];
                     const Vec3f& q = particles.positions[i];
@@ -222,21 +288,20 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                                  x0 = double(q[A]);
                     crossed.clear();
                     int winding = 0; // leaving crossings less entering ones ahead: 1 inside
-                    for (const Plane& pl : planes) {
-                        const double s = pl.su * u + pl.sv * v + pl.s0,
-                                     w = pl.wu * u + pl.wv * v + pl.w0;
-                        if (!(s >= 0 && w >= 0 && s + w <= 1)) continue;
-                        const double x = pl.xa + s * pl.xs + w * pl.xw;
-                        if (!(x > x0)) continue;
-                        winding += pl.sign;
-                        auto it =
-                            std::find_if(crossed.begin(), crossed.end(),
-                                         [&](const Crossing& c) { return c.comp == pl.comp; });
+                    auto hit = [&](size_t k, double x) {
+                        winding += planes.sign[k];
+                        const uint32_t comp = planes.comp[k];
+                        auto it = std::find_if(crossed.begin(), crossed.end(),
+                                               [&](const Crossing& c) { return c.comp == comp; });
                         if (it == crossed.end())
-                            crossed.push_back({pl.comp, 1, x});
+                            crossed.push_back({comp, 1, x});
                         else
                             ++it->count, it->nearest = std::min(it->nearest, x);
-                    }
+                    };
+                    if (wide)
+                        wideCrossings(planes, u, v, x0, hit);
+                    else
+                        crossings<util::Doubles>(planes, u, v, x0, hit);
                     if (winding <= 0) continue; // outside the fluid (or in a cavity of it)
                     // the components around the particle are those the ray crosses an odd
                     // number of times; of the outward ones (a cavity's faces point in: negative

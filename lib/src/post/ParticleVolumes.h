@@ -20,11 +20,12 @@ namespace post {
 /// where the ray's crossings say the particle is in the fluid; else kNoComponent (outside, or in
 /// a cavity). cellSize:
 /// the (y, z) grid the triangles are binned in (about an edge's length). Parallel; the same
-/// answer for any thread count.
+/// answer for any thread count. lanes: doubles a register in the ray tests, 2 or 4 (4 needs
+/// AVX2; ValueError otherwise), 0 for the CPU's widest: the same answer for each.
 std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                                             const std::vector<uint32_t>& ofPoint,
                                             const Components& c, const ParticleVolumes& particles,
-                                            double cellSize);
+                                            double cellSize, int lanes = 0);
 
 /// c.volume of every component that holds a particle (`of`: componentsOfParticles') becomes its
 /// particles' volume, sum (2 r_j)^3, added in the particles' order; returns how many components

@@ -1,10 +1,10 @@
 // CoverParticlesTest.cc - the step that covers the particle centres a surface leaves outside
-// (post/CoverParticles): on a sphere ten voxels across, centres half a voxel and nearly a voxel
+// (post/CoverParticles): on a sphere of radius ten voxels, centres half a voxel and nearly a voxel
 // out end inside (ray parity, MeshInside.h) and at least half the margin from the surface (exact
 // distances to every triangle), one inside by less than half the margin is pushed to it, one
 // too far out is left; points out of every bump's reach keep their bits, no triangle turns by
-// 60 degrees or more. A thin disc's far side stays where it was when a centre sits over its near
-// side; the same bits for any thread count.
+// 60 degrees or more. Centres past the first batches are covered as well. A thin disc's far side
+// stays where it was when a centre sits over its near side; the same bits for any thread count.
 #include "post/CoverParticles.h"
 #include "MeshInside.h"
 #include "post/IsolatedSpheres.h"
@@ -97,6 +97,22 @@ TEST(CoverParticles, CentresOutsideEndInsideAndNothingFarMoves)
     EXPECT_TRUE(after.watertight()) << describe(after);
     EXPECT_GT(after.volume, before.volume);
     EXPECT_LT(after.volume, 1.01 * before.volume);
+}
+
+TEST(CoverParticles, CentresAfterTheFirstBatchesAreCoveredToo)
+{
+    // the centres go 16,384 at a time (a bound on the memory of their patches): 40,000 far out,
+    // then two to cover, one in the third batch
+    const TriangleMesh sphere = ellipsoid(10, 10, 10);
+    std::vector<Vec3f> centres(40000, Vec3f(100, 0, 0));
+    centres[20000] = along({1, 0.2f, 0.1f}, 10.5f), centres.back() = along({0, 1, 0}, 10.4f);
+    TriangleMesh m = sphere;
+    const post::CoverStats st =
+        post::coverParticles(m, post::VertexTriangles(m), centres, coverParams());
+    EXPECT_EQ(st.covered, 2u);
+    EXPECT_EQ(st.left, 39998u);
+    const std::vector<bool> inside = test::insideMesh(m, {centres[20000], centres.back()});
+    EXPECT_TRUE(inside[0] && inside[1]);
 }
 
 TEST(CoverParticles, AThinDiscsFarSideStays)
