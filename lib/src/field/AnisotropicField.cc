@@ -1,6 +1,7 @@
 // AnisotropicField.cc - the anisotropic SSP07 field (see the header). Per leaf, the kernels whose
-// boxes reach its active voxels, leaf-local, in the cell index's order; per 2 x 2 x 2 block of
-// voxels, those that can reach the block (a test eight kernels a register); then the block's
+// boxes reach its active voxels, leaf-local, in the cell index's order; per 4 x 4 x 4 quarter,
+// those that can reach it, and per 2 x 2 x 2 block of the quarter (all eight in one pass over the
+// quarter's), those that can reach the block (tests eight kernels a register); then the block's
 // eight voxels on the eight lanes of a register, kernel after kernel (AnisotropicSums.h says why
 // that order gives the same bits for any superset of kernels, which is what lets the device test
 // voxel by voxel).
@@ -111,13 +112,13 @@ uint32_t pickNarrow(const KernelArrays& from, const BoxTest& t, KernelArrays* to
     return n;
 }
 
-/// pickNarrow eight kernels a register with AVX2: the passing lanes packed to the front by one
-/// permute (util::kSetBits) and stored whole.
-__attribute__((target("avx2"))) uint32_t pickWide(const KernelArrays& from, const BoxTest& t,
-                                                  KernelArrays* to, uint32_t* picked)
+/// pickNarrow into `to` eight kernels a register with AVX2: the passing lanes packed to the
+/// front by one permute (util::kSetBits) and stored whole. (The blocks' index lists:
+/// pickBlocksWide.)
+__attribute__((target("avx2"))) void pickWide(const KernelArrays& from, const BoxTest& t,
+                                              KernelArrays& to)
 {
     uint32_t n = 0;
-    const __m256i step = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     for (size_t j = 0; j < from.paddedSize(); j += 8) {
         WideLanes l[KernelArrays::kArrays];
         for (int a = 0; a < KernelArrays::kArrays; ++a)
@@ -131,17 +132,61 @@ __attribute__((target("avx2"))) uint32_t pickWide(const KernelArrays& from, cons
         const unsigned mask = unsigned(_mm256_movemask_ps(__m256(in)));
         __m256i order;
         std::memcpy(&order, util::kSetBits.positions[mask], sizeof order);
-        if (to)
-            for (int c = 0; c < KernelArrays::kArrays; ++c)
-                _mm256_storeu_ps(&to->v[c][n], _mm256_permutevar8x32_ps(__m256(l[c]), order));
-        else
-            _mm256_storeu_si256(reinterpret_cast<__m256i*>(&picked[n]),
-                                _mm256_permutevar8x32_epi32(
-                                    _mm256_add_epi32(_mm256_set1_epi32(int(j)), step), order));
+        for (int c = 0; c < KernelArrays::kArrays; ++c)
+            _mm256_storeu_ps(&to.v[c][n], _mm256_permutevar8x32_ps(__m256(l[c]), order));
         n += util::kSetBits.count[mask];
     }
-    if (to) to->size = n, to->pad();
-    return n;
+    to.size = n, to.pad();
+}
+
+/// pickWide's block tests for all of a quarter's 2 x 2 x 2 blocks in one pass over the
+/// quarter's kernels (from), for the blocks whose bit is set in `blocks`: block b's indices into
+/// picked + b * stride, their count into n[b]. q: the quarter's centre (leaf-local); a block's
+/// centre lies dx from it along each axis (d = sign * dx), so its d.A'd comes from the quarter's
+/// e = c - q: (e - d).A(e - d) = e.Ae - 2 d.(Ae) + d.Ad, a few operations a block where the
+/// direct form took twenty (the block tests were a fifth of the stage on 2 cores). Its float
+/// rounding differs from the direct form's by parts in 1e6 of terms of the size of the bound, far
+/// inside the test's 1e-3: a kernel it leaves out reaches no voxel of the block either, and one it
+/// keeps that the direct form would not adds exact zeros (AnisotropicSums.h).
+__attribute__((target("avx2"))) void pickBlocksWide(const KernelArrays& from, const float q[3],
+                                                    float dx, float h, float R, unsigned blocks,
+                                                    uint32_t* picked, size_t stride, uint32_t n[8])
+{
+    for (int b = 0; b < 8; ++b)
+        n[b] = 0;
+    const __m256i step = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    const float dx2 = dx * dx;
+    for (size_t j = 0; j < from.paddedSize(); j += 8) {
+        WideLanes l[KernelArrays::kArrays];
+        for (int a = 0; a < KernelArrays::kArrays; ++a)
+            std::memcpy(&l[a], &from.v[a][j], sizeof l[a]);
+        const WideLanes ex = l[kCx] - q[0], ey = l[kCy] - q[1], ez = l[kCz] - q[2];
+        const WideLanes* a = &l[kA0];
+        const WideLanes gx = a[0] * ex + a[1] * ey + a[2] * ez,
+                        gy = a[1] * ex + a[3] * ey + a[4] * ez,
+                        gz = a[2] * ex + a[4] * ey + a[5] * ez;
+        const WideLanes centre = ex * gx + ey * gy + ez * gz + dx2 * (a[0] + a[3] + a[5]);
+        const WideLanes tx = 2.f * dx * gx, ty = 2.f * dx * gy, tz = 2.f * dx * gz;
+        const WideLanes cxy = 2.f * dx2 * a[1], cxz = 2.f * dx2 * a[2], cyz = 2.f * dx2 * a[4];
+        const WideLanes reachOf = R + l[kStretch] * h;
+        const WideLanes bound = reachOf * reachOf * 1.001f;
+        const auto valid = l[kStretch] >= 0.f;
+        const __m256i index = _mm256_add_epi32(_mm256_set1_epi32(int(j)), step);
+        for (int b = 0; b < 8; ++b) {
+            if (!(blocks >> b & 1)) continue;
+            const bool px = b >> 2 & 1, py = b >> 1 & 1, pz = b & 1;
+            const WideLanes lin = (px ? tx : -tx) + (py ? ty : -ty) + (pz ? tz : -tz);
+            const WideLanes cross =
+                (px == py ? cxy : -cxy) + (px == pz ? cxz : -cxz) + (py == pz ? cyz : -cyz);
+            const auto in = (centre - lin + cross < bound) & valid;
+            const unsigned mask = unsigned(_mm256_movemask_ps(__m256(in)));
+            __m256i order;
+            std::memcpy(&order, util::kSetBits.positions[mask], sizeof order);
+            _mm256_storeu_si256(reinterpret_cast<__m256i*>(&picked[b * stride + n[b]]),
+                                _mm256_permutevar8x32_epi32(index, order));
+            n[b] += util::kSetBits.count[mask];
+        }
+    }
 }
 
 /// addKernel's operations on eight floats with AVX2 and FMA.
@@ -318,7 +363,21 @@ struct Gather
             if (!any) continue;
             const BoxTest quarter{float((qi + 1.5) * dx), float((qj + 1.5) * dx),
                                   float((qk + 1.5) * dx), float(1.5 * dx) * root3, R};
-            (wide ? pickWide : pickNarrow)(s.leaf, quarter, &s.quarter, nullptr);
+            if (wide)
+                pickWide(s.leaf, quarter, s.quarter);
+            else
+                pickNarrow(s.leaf, quarter, &s.quarter, nullptr);
+            const size_t stride = s.quarter.paddedSize() + 8;
+            uint32_t count[8];
+            if (wide) {
+                if (s.picked.size() < 8 * stride) s.picked.resize(8 * stride);
+                const float centre[3] = {quarter.bx, quarter.by, quarter.bz};
+                unsigned used = 0;
+                for (int b = 0; b < 8; ++b)
+                    used |= unsigned(blocks[b] != 0) << b;
+                pickBlocksWide(s.quarter, centre, float(dx), float(0.5 * dx) * root3, R, used,
+                               s.picked.data(), stride, count);
+            }
             for (int b = 0; b < 8; ++b) {
                 const unsigned bits = blocks[b];
                 if (!bits) continue;
@@ -326,14 +385,14 @@ struct Gather
                           kz = qk + 2 * (b & 1);
                 const BoxTest block{float((i + 0.5) * dx), float((j + 0.5) * dx),
                                     float((kz + 0.5) * dx), float(0.5 * dx) * root3, R};
+                const uint32_t* picked = s.picked.data() + (wide ? b * stride : 0);
                 const uint32_t n =
-                    (wide ? pickWide : pickNarrow)(s.quarter, block, nullptr, s.picked.data());
+                    wide ? count[b] : pickNarrow(s.quarter, block, nullptr, s.picked.data());
                 float vx[8], vy[8], vz[8];
                 for (int l = 0; l < 8; ++l)
                     vx[l] = local[i + (l >> 2 & 1)], vy[l] = local[j + (l >> 1 & 1)],
                     vz[l] = local[kz + (l & 1)];
                 FieldSums voxels[8];
-                const uint32_t* picked = s.picked.data();
                 if (wide && radii)
                     blockSumsWide<true>(s.quarter, picked, n, vx, vy, vz, invR2, voxels);
                 else if (wide)
