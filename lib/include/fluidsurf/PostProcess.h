@@ -56,7 +56,8 @@ struct ParticleVolumes
 };
 
 /// Mesh post-processing (thesis chapter 5), in this order: decimation, smoothing (ours), Loop
-/// subdivision, isolated particles as spheres. Each surface step moves the surface by a bounded
+/// subdivision, the volumes given back, the particle centres left outside covered (ours; with the
+/// particles), isolated particles as spheres. Each surface step moves the surface by a bounded
 /// amount (a share of half a voxel, lib/src/post/PostProcess.cc), so that thin tips and
 /// droplets keep their size.
 struct PostProcessParams
