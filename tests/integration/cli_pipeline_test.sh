@@ -101,6 +101,11 @@ assert got[0] > 0 and got[2] > 0 and got[4] + got[5] > 0, got" "$out"
 expect_error "adaptive: refused with the gather-full baseline" "narrow-band method only" \
     "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/x.ply" --adaptive --method gather-full
 
+# --- the heap on huge pages: the process starts again (ProcessMemory.h), the same bytes out ----
+FLUIDSURF_HUGE_PAGES=0 "$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/hp0.ply" -q
+check "huge pages: the run started again writes the same mesh" bash -c "FLUIDSURF_HUGE_PAGES=1 '$BIN' reconstruct '$T/drop.bgeo' -r 0.01 -o '$T/hp1.ply' -q && cmp '$T/hp0.ply' '$T/hp1.ply'"
+check "huge pages: the same with the user's own GLIBC_TUNABLES" bash -c "FLUIDSURF_HUGE_PAGES=1 GLIBC_TUNABLES=glibc.malloc.tcache_count=7 '$BIN' reconstruct '$T/drop.bgeo' -r 0.01 -o '$T/hp2.ply' -q && cmp '$T/hp0.ply' '$T/hp2.ply'"
+
 # --- Ctrl-C: exit code 130, one line, nothing written -----------------------------------------
 "$BIN" generate drop --count 1000000 -r 0.01 -o "$T/big.bgeo" >/dev/null
 for cmd in reconstruct rasterize; do

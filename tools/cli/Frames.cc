@@ -107,6 +107,17 @@ void checkRunFiles(const std::vector<std::string>& inputs, std::vector<std::stri
     refuseUnwritableOutputs(outputs);
 }
 
+uint64_t inputBytes(const std::vector<FrameJob>& jobs, const std::vector<size_t>& picked)
+{
+    uint64_t bytes = 0;
+    for (size_t i : picked) {
+        struct stat st;
+        if (i < jobs.size() && ::stat(jobs[i].input.c_str(), &st) == 0 && S_ISREG(st.st_mode))
+            bytes += uint64_t(st.st_size);
+    }
+    return bytes;
+}
+
 std::vector<std::string> inputsOf(const std::vector<FrameJob>& jobs)
 {
     std::vector<std::string> v;

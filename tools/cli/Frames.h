@@ -3,6 +3,7 @@
 
 #include <fluidsurf/FramePattern.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,9 @@ void refuseUnwritableOutputs(const std::vector<std::string>& outputs);
 /// a run writes is one of its inputs or another of its outputs, and every one can be written.
 void checkRunFiles(const std::vector<std::string>& inputs, std::vector<std::string> outputs,
                    const std::string& stats = std::string());
+
+/// The bytes of the input files of jobs[i] for i in picked (those that can be read).
+uint64_t inputBytes(const std::vector<FrameJob>& jobs, const std::vector<size_t>& picked);
 
 /// The inputs and outputs of frame jobs, for refuseOverwritingInputs.
 std::vector<std::string> inputsOf(const std::vector<FrameJob>& jobs);

@@ -5,6 +5,7 @@
 #include "Commands.h"
 #include "Frames.h"
 #include "Options.h"
+#include "ProcessMemory.h"
 
 #include "ParticleFrames.h"
 #include "Progress.h"
@@ -120,6 +121,7 @@ int runMeshFrames(const MeshOptions& o, const char* name, const ReadInput& read,
     const PipelineOptions& po = o.pipeline;
     const auto jobs = planMeshJobs(o);
     checkRunFiles(inputsOf(jobs), outputsOf(jobs), po.stats);
+    useHugePagesFor(inputBytes(jobs, shardOf(jobs, o.sequence.shard)));
     Context ctx;
     const auto threadLimit = po.setUp(ctx);
     prepareDevice(ctx.device()); // the CUDA context (0.1-0.3 s) made while the first file is read
@@ -425,6 +427,7 @@ Runner addReconstructCommand(CLI::App& app)
         std::vector<std::string> outputs = outputsOf(jobs), vdbOutputs = outputsOf(vdbJobs);
         outputs.insert(outputs.end(), vdbOutputs.begin(), vdbOutputs.end());
         checkRunFiles(inputsOf(jobs), outputs, po.stats);
+        useHugePagesFor(inputBytes(jobs, shardOf(jobs, o->sequence.shard)));
         ReconstructParams params = po.resolved();
         params.keepGrids = !vdbJobs.empty(); // without --vdb it goes before post-processing
         const std::vector<std::string> gridAttributes =

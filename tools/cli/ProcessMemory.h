@@ -3,13 +3,26 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 namespace fluidsurf {
 namespace cli {
 
 /// glibc's heap kept for reuse (no large array mapped on its own, no trimming on free), and
-/// releaseLoaderTables() (see ProcessMemory.cc).
-void setUpProcessMemory();
+/// releaseLoaderTables() (see ProcessMemory.cc). argv: main's, for useHugePagesFor.
+void setUpProcessMemory(char** argv);
+
+/// Input a run reads from which its heap goes on huge pages (useHugePagesFor).
+constexpr uint64_t kHugePagesFrom = uint64_t(12) << 20;
+
+/// With inputBytes >= kHugePagesFrom (the files of the frames this run will read), starts the
+/// process again, the same arguments, with glibc's heap on transparent huge pages (the tunable
+/// glibc.malloc.hugetlb=1); call it before any output and before any thread of the run's own.
+/// FLUIDSURF_HUGE_PAGES=1 does it whatever the input, =0 never. Not when the kernel gives no huge
+/// pages, or when GLIBC_TUNABLES names the tunable already. The process started again sees
+/// GLIBC_TUNABLES as the user had it (its children do not inherit the tunable). Why and when:
+/// ProcessMemory.cc.
+void useHugePagesFor(uint64_t inputBytes);
 
 /// Drops from the process the resident pages of each loaded object's symbol tables (the
 /// read-only segment holding its dynamic symbols, their names and relocations), which the

@@ -4,6 +4,7 @@
 #include "Frames.h"
 #include "Options.h"
 #include "ParticleFrames.h"
+#include "ProcessMemory.h"
 #include "Progress.h"
 #include "Sequence.h"
 
@@ -60,6 +61,7 @@ Runner addRasterizeCommand(CLI::App& app)
         const PipelineOptions& po = o->pipeline;
         const auto jobs = planVdbFrames(o->input, o->output, o->frames, "output");
         checkRunFiles(inputsOf(jobs), outputsOf(jobs), po.stats);
+        useHugePagesFor(inputBytes(jobs, shardOf(jobs, o->sequence.shard)));
         ReconstructParams params = po.resolved();
         Context ctx;
         const auto threadLimit = po.setUp(ctx);

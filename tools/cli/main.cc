@@ -46,7 +46,7 @@ std::string oneLine(const std::string& s)
 int main(int argc, char** argv)
 {
     using namespace fluidsurf;
-    cli::setUpProcessMemory(); // first: before the stages allocate
+    cli::setUpProcessMemory(argv); // first: before the stages allocate
     // TBB's workers asked for now, while the command line is read: they come one after
     // another, and the first parallel loop (a raw .xyz read's page faults) ran on a few threads
     // while they did. On an H100 host's 16 threads the 13.1M drop's 157 MB of positions
