@@ -19,6 +19,8 @@
 #include <unistd.h>
 #endif
 
+#include <tbb/info.h>
+
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -65,15 +67,19 @@ void setTunables(const char* value)
 // 0.46 s). glibc reads the tunable only as a process starts, so the process starts again, and
 // a start costs 0.08-0.1 s here (the loader binding OpenVDB's 63,000 relocations): paid back
 // from about 400k particles, which is why only runs that read kHugePagesFrom or more do it
-// (12 MiB: 1M particles as .xyz, 300k as .vtk; a sequence counts all its frames).
-void useHugePagesFor(uint64_t inputBytes)
+// (12 MiB: 1M particles as .xyz, 300k as .vtk; a sequence counts all its frames). On 8 threads
+// and more the library asks for huge pages for its big arrays itself (util::adviseHugePages),
+// and the start again is a loss: an H200 host's 16 threads, 5 runs alternating, the 1.7M frame
+// 0.844 -> 0.878 s (CUDA 1.120 -> 1.098 s), the 13.1M drop 1.983 -> 1.960 s (CUDA 2.068 ->
+// 2.139 s), medians; so only runs on fewer threads start again.
+void useHugePagesFor(uint64_t inputBytes, int threads)
 {
 #ifdef __GLIBC__
     const char* choice = std::getenv("FLUIDSURF_HUGE_PAGES"); // "0" never, "1" always
     const bool always = choice && std::strcmp(choice, "1") == 0;
-    if ((choice && std::strcmp(choice, "0") == 0) || (inputBytes < kHugePagesFrom && !always) ||
-        !gArgv)
-        return;
+    const int used = threads > 0 ? threads : tbb::info::default_concurrency();
+    const bool worth = inputBytes >= kHugePagesFrom && used < kHugePagesBelowThreads;
+    if ((choice && std::strcmp(choice, "0") == 0) || !(worth || always) || !gArgv) return;
     if (gStartedAgain) return;
     const char* tunables = std::getenv("GLIBC_TUNABLES");
     if (tunables && std::strstr(tunables, "glibc.malloc.hugetlb")) return; // the user's choice

@@ -14,15 +14,19 @@ void setUpProcessMemory(char** argv);
 
 /// Input a run reads from which its heap goes on huge pages (useHugePagesFor).
 constexpr uint64_t kHugePagesFrom = uint64_t(12) << 20;
+/// Threads from which it does not: the library's own huge pages take over there (the value of
+/// util::kHugePageThreads, lib/src/util/Memory.h, which the command line does not include).
+constexpr int kHugePagesBelowThreads = 8;
 
-/// With inputBytes >= kHugePagesFrom (the files of the frames this run will read), starts the
+/// With inputBytes >= kHugePagesFrom (the files of the frames this run will read) and fewer
+/// than kHugePagesBelowThreads threads (`threads`, -j; 0 for all the cores TBB sees), starts the
 /// process again, the same arguments, with glibc's heap on transparent huge pages (the tunable
 /// glibc.malloc.hugetlb=1); call it before any output and before any thread of the run's own.
 /// FLUIDSURF_HUGE_PAGES=1 does it whatever the input, =0 never. Not when the kernel gives no huge
 /// pages, or when GLIBC_TUNABLES names the tunable already. The process started again sees
 /// GLIBC_TUNABLES as the user had it (its children do not inherit the tunable). Why and when:
 /// ProcessMemory.cc.
-void useHugePagesFor(uint64_t inputBytes);
+void useHugePagesFor(uint64_t inputBytes, int threads);
 
 /// Drops from the process the resident pages of each loaded object's symbol tables (the
 /// read-only segment holding its dynamic symbols, their names and relocations), which the
