@@ -8,11 +8,13 @@
 //   useParticles / evaluate   phi at the active voxels of any tree (band completion, the
 //               gather-full baseline), for the particles of the last narrowBand or useParticles
 //   marchingCubes   a level set's mesh (mesh/MarchingCubes.h; the same bytes on either)
+//   smoothMesh      post-processing's smoothing (post/Smooth.h; the same points on either)
 //
 // Selection, the Auto fallback and its reason live in one place too (selectBackend, runOn).
 #pragma once
 
 #include "neighbors/CellIndex.h"
+#include "post/Smooth.h"
 
 #include <fluidsurf/Context.h>
 #include <fluidsurf/Level.h>
@@ -77,6 +79,11 @@ public:
     /// cannot take the grid (the GPU's leaf keys).
     virtual bool marchingCubes(const openvdb::FloatGrid& grid, RawNormals normals, Context& ctx,
                                TriangleMesh& out, size_t& cells) = 0;
+
+    /// mesh smoothed in place as post::smoothAlongNormals(mesh, params) smooths it, to the bit
+    /// (its points only: the triangles stay, the normals go). Throws Error where the device
+    /// fails, leaving mesh as it was but for its normals.
+    virtual void smoothMesh(TriangleMesh& mesh, const post::SmoothParams& params, Context& ctx) = 0;
 };
 
 std::unique_ptr<Backend> makeCpuBackend();

@@ -138,6 +138,11 @@ public:
         return true;
     }
 
+    void smoothMesh(TriangleMesh& mesh, const post::SmoothParams& params, Context&) override
+    {
+        mesh = post::smoothAlongNormals(std::move(mesh), params);
+    }
+
 private:
     neighbors::CellIndex mOwned;
     const neighbors::CellIndex* mParticles = nullptr;

@@ -17,6 +17,7 @@
 #include "facade/FieldGather.h"
 #include "facade/MarchingCubes.h"
 #include "facade/NarrowBandPipeline.h"
+#include "facade/Smooth.h"
 #include "narrowband/NarrowBand.h"
 
 #include <openvdb/tree/LeafManager.h>
@@ -416,6 +417,31 @@ public:
         mesh::dropUnusedVertices(mesh, ctx);
         out = std::move(mesh);
         return true;
+    }
+
+    void smoothMesh(TriangleMesh& mesh, const post::SmoothParams& params, Context&) override
+    {
+        if (post::smoothingLeaves(mesh, params)) return;
+        mesh.normals.clear(); // (as the CPU's: see post/Normals.h)
+        const post::SmoothRings rings = post::smoothRings(mesh);
+        cuda::SmoothInput in;
+        in.points = mesh.points.data(), in.pointCount = mesh.points.size();
+        static_assert(sizeof(mesh.triangles[0]) == 3 * sizeof(uint32_t), "3 indices");
+        in.triangles = mesh.triangles[0].data(), in.triangleCount = mesh.triangles.size();
+        in.cornerStart = rings.corners.start.data(), in.cornerTris = rings.corners.tris.data();
+        in.ringStart = rings.ringStart.data(), in.ring = rings.ring.data();
+        in.fixed = rings.fixed.data();
+        in.rounds = params.rounds, in.maxMove = params.maxMove;
+        in.flatten = params.flatten, in.flatMove = params.flatMove, in.voxel = params.voxel;
+        in.cellGrid = [](const float lo[3], const float hi[3], double cellSize, double origin[3],
+                         uint32_t dims[3]) {
+            BBox3f box; // (the CPU's cell index of the same points: neighbors/CellIndex)
+            box.expand(Vec3f(lo[0], lo[1], lo[2])), box.expand(Vec3f(hi[0], hi[1], hi[2]));
+            neighbors::cellGrid(box, cellSize, origin, dims);
+        };
+        std::vector<Vec3f> points(mesh.points.size());
+        cuda::smoothPoints(in, points.data());
+        mesh.points.swap(points);
     }
 
 private:

@@ -14,6 +14,8 @@
 #include <fluidsurf/Error.h>
 
 #include "util/Lanes.h"
+#include "util/Memory.h"
+#include "util/RadixSort.h"
 #include "util/Vec3d.h"
 
 #include <tbb/blocked_range.h>
@@ -226,10 +228,12 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
     // the ray starts a hair off the particle across it, so that it meets no edge or corner of
     // the mesh (whose points are floats) and crosses each surface exactly once where it does
     const double nudgeU = 1.4142135623e-7 * g.cell, nudgeV = 1.7320508075e-7 * g.cell;
-    // the particles sorted by column (counting sort, in input order within one), so that each
-    // column's triangles are set up once and stay in cache for all its particles
+    // the particles sorted by column (in input order within one), so that each column's
+    // triangles are set up once and stay in cache for all its particles: a stable radix sort
+    // of (column, particle) on all threads (a counting sort on one thread was a third of this
+    // step on 16: 1.7M particles, two passes of scattered writes)
     const size_t columns = g.start.size() - 1;
-    std::vector<uint32_t> columnOf(particles.count), first(columns + 1, 0);
+    util::NoInitVector<uint64_t> keyed(particles.count); // column << 32 | particle
     tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.count, 1 << 14),
                       [&](const tbb::blocked_range<size_t>& r) {
                           for (size_t i = r.begin(); i != r.end(); ++i) {
@@ -237,19 +241,28 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                               const int64_t cu = g.cellOf(double(q[U]) + nudgeU, g.u0),
                                             cv = g.cellOf(double(q[V]) + nudgeV, g.v0);
                               const bool in = cu >= 0 && cv >= 0 && cu < g.nu && cv < g.nv;
-                              columnOf[i] = in ? uint32_t(cv * g.nu + cu) : UINT32_MAX;
+                              // (outside every column: sorted last, as column `columns`)
+                              keyed[i] = uint64_t(in ? size_t(cv * g.nu + cu) : columns) << 32 | i;
                           }
                       });
-    for (uint32_t c : columnOf)
-        if (c != UINT32_MAX) ++first[c + 1];
-    for (size_t c = 0; c < columns; ++c)
-        first[c + 1] += first[c];
-    std::vector<uint32_t> sorted(first[columns]);
-    {
-        std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-        for (size_t i = 0; i < particles.count; ++i)
-            if (columnOf[i] != UINT32_MAX) sorted[fill[columnOf[i]]++] = uint32_t(i);
-    }
+    int keyBits = 1;
+    while ((uint64_t(1) << keyBits) <= columns)
+        ++keyBits;
+    util::radixSortStable(keyed, keyBits, [](uint64_t k) { return k >> 32; });
+    // first[c]: where column c's particles begin (a column's start written by the first of its
+    // particles, with those of the empty columns before it)
+    std::vector<uint32_t> first(columns + 1);
+    const size_t n = keyed.size();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n + 1, 1 << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t k = r.begin(); k != r.end(); ++k) {
+                              const size_t from = k == 0 ? 0 : size_t(keyed[k - 1] >> 32) + 1,
+                                           to = k == n ? columns : size_t(keyed[k] >> 32);
+                              for (size_t c = from; c <= to && c <= columns; ++c)
+                                  first[c] = uint32_t(k);
+                          }
+                      });
+    auto particleAt = [&](uint32_t at) { return size_t(uint32_t(keyed[at])); };
     const bool wide = lanes == 4;
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, columns, 64), [&](const tbb::blocked_range<size_t>& r) {
@@ -282,7 +295,7 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                 }
                 planes.pad();
                 for (uint32_t at = first[col]; at < first[col + 1]; ++at) {
-                    const size_t i = sorted[at];
+                    const size_t i = particleAt(at);
                     const Vec3f& q = particles.positions[i];
                     const double u = double(q[U]) + nudgeU - cu0, v = double(q[V]) + nudgeV - cv0,
                                  x0 = double(q[A]);

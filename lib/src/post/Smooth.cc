@@ -10,6 +10,7 @@
 #include "post/Smooth.h"
 
 #include "post/Normals.h"
+#include "post/SmoothSteps.h"
 
 #include "neighbors/CellIndex.h"
 
@@ -30,35 +31,25 @@ namespace post {
 
 namespace {
 
-constexpr double kLambda = 0.5, kMu = -0.5;
+using namespace steps; // (post/SmoothSteps.h: the numbers, shared with the GPU's smoothing)
 
-// The flattening (Smooth.h), measured on a jittered slab (J = 0.2-0.4, `fluidsurf_bench
-// quality`) and the real frames (BENCHMARKS.md, issue 64): fewer flat steps leave the slab's top
-// bumpier (at lambda 0.5: 40 steps 0.79x splashsurf's at J = 0.4, 60: 0.77x, 80: 0.76x). The
-// slow part's low pass: with the flat steps pulled by curved neighbours too, 20 steps (a longer
-// one gave a curved body back less of its volume: hilbert 0.875 of N (2r)^3 at 40); with flat
-// neighbours only (flatMean below), no border sag is left to give back, and a longer pass gives
-// back less of the jitter's long waves: J = 0.4 at 0.57x with 80 steps (0.60x with 60, 0.76x
-// with 20), a 4-layer slab 0.66-0.82x (was 0.84-0.97x), hilbert still 0.885. With 10 steps on
-// the curvature's copy, the jitter still curved parts of the slab's top (seed 3: 0.96x at
-// J = 0.4; 20 steps: 0.76x). The flat steps take lambda 0.9 (a plain Laplacian step's transfer
-// 1 - lambda k stays within (-1, 1] for the umbrella's k in [0, 2]): 34 of them do what 60 at
-// 0.5 did (the same figures to 0.01x), in less time.
-constexpr int kFlatSteps = 34;      ///< plain Laplacian steps on the flat regions
-constexpr double kFlatLambda = 0.9; ///< their factor
-constexpr int kSlowSteps = 80;      ///< averaging steps that take the slow part of their moves
-/// flat steps per new set of normals: a flat region's normals turn little in a step (at lambda
-/// 0.5 the same slab and frames' figures to 0.01x every 6 steps; never again after the first:
-/// 0.95x at J = 0.4), and the normals were 60% of the flat steps' time
-constexpr int kNormalSteps = 4;
-constexpr int kShapeSteps = 20;  ///< plain Laplacian steps on the copy the curvature is taken on
-constexpr int kFeatureRings = 2; ///< rings over which a curved point keeps its neighbours still
-/// voxels: a point with the surface facing it this near counts as thin (3: the mesh of
-/// double_dam_break_frame_26 0.49 -> 0.29 voxel from its raw one, as without the flattening;
-/// 4 also made bunny's 0.40 -> 0.42)
-constexpr double kThinReach = 3;
-constexpr double kFlatCurvature = 1 / 33.0;   ///< per voxel: full weight below
-constexpr double kCurvedCurvature = 1 / 12.5; ///< per voxel: no weight above
+// Why these numbers (SmoothSteps.h), measured on a jittered slab (J = 0.2-0.4, `fluidsurf_bench
+// quality`) and the real frames (BENCHMARKS.md, issue 64): fewer flat steps (kFlatSteps) leave
+// the slab's top bumpier (at lambda 0.5: 40 steps 0.79x splashsurf's at J = 0.4, 60: 0.77x, 80:
+// 0.76x). The slow part's low pass (kSlowSteps): with the flat steps pulled by curved neighbours
+// too, 20 steps (a longer one gave a curved body back less of its volume: hilbert 0.875 of
+// N (2r)^3 at 40); with flat neighbours only (flatMean below), no border sag is left to give
+// back, and a longer pass gives back less of the jitter's long waves: J = 0.4 at 0.57x with 80
+// steps (0.60x with 60, 0.76x with 20), a 4-layer slab 0.66-0.82x (was 0.84-0.97x), hilbert
+// still 0.885. With 10 steps on the curvature's copy (kShapeSteps), the jitter still curved
+// parts of the slab's top (seed 3: 0.96x at J = 0.4; 20 steps: 0.76x). The flat steps take
+// lambda 0.9 (kFlatLambda: a plain Laplacian step's transfer 1 - lambda k stays within (-1, 1]
+// for the umbrella's k in [0, 2]): 34 of them do what 60 at 0.5 did (the same figures to
+// 0.01x), in less time. kNormalSteps: a flat region's normals turn little in a step (at lambda
+// 0.5 the same slab and frames' figures to 0.01x every 6 steps; never again after the first:
+// 0.95x at J = 0.4), and the normals were 60% of the flat steps' time. kThinReach 3: the mesh of
+// double_dam_break_frame_26 0.49 -> 0.29 voxel from its raw one, as without the flattening; 4
+// also made bunny's 0.40 -> 0.42.
 
 template <typename Body> void forEachPoint(size_t n, const Body& body)
 {
@@ -158,7 +149,7 @@ void stepAlongNormals(const Rings& rings, AreaNormals& normals, const Points& fr
 /// (double_dam_break_frame_26's sheets on its floor, one particle thick, came out half a voxel
 /// from the raw mesh). Points already curved are not tested (a third of the time on the 1.7M
 /// frame).
-void markThin(const Rings& rings, AreaNormals& normals, const Points& p, double voxel,
+void markThin(AreaNormals& normals, const Points& p, double voxel,
               util::NoInitVector<double>& kappa)
 {
     const size_t nv = p.size();
@@ -182,7 +173,7 @@ void markThin(const Rings& rings, AreaNormals& normals, const Points& p, double 
         cells.forEachCellInBox(lo, hi, [&](uint32_t begin, uint32_t end) {
             for (uint32_t i = begin; i < end && !faced; ++i) {
                 const uint32_t u = cells.order[i];
-                faced = unit[u].dot(n) < -0.5 && (p[u] - p[v]).lengthSqr() < reach * reach;
+                faced = unit[u].dot(n) < kFacing && (p[u] - p[v]).lengthSqr() < reach * reach;
             }
         });
         if (faced) kappa[v] = std::numeric_limits<double>::infinity();
@@ -223,7 +214,7 @@ util::NoInitVector<double> flatWeights(const Rings& rings, AreaNormals& normals,
         const double k = 2 * std::abs(n.dot(rings.mean(shape.data(), v) - shape[v])) / edges;
         if (k < curved) kappa[v] = k; // (past it: weight 0 either way, and no thin test)
     });
-    markThin(rings, normals, p, voxel, kappa);
+    markThin(normals, p, voxel, kappa);
     for (int ring = 0; ring < kFeatureRings; ++ring) {
         forEachPoint(nv, [&](size_t v) {
             double k = kappa[v];
@@ -252,7 +243,7 @@ void unfold(const TriangleMesh& mesh, const Rings& rings, const Points& start, P
     auto turned = [&](const std::array<uint32_t, 3>& t) {
         const Vec3d before = (start[t[1]] - start[t[0]]).cross(start[t[2]] - start[t[0]]),
                     after = (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
-        return after.dot(before) < 0.5 * after.length() * before.length();
+        return after.dot(before) < kTurned * after.length() * before.length();
     };
     for (bool any = true; any;) {
         forEachPoint(nv, [&](size_t v) {
@@ -333,12 +324,32 @@ void flatten(const TriangleMesh& mesh, const Rings& rings, AreaNormals& normals,
 
 } // namespace
 
+bool smoothingLeaves(const TriangleMesh& mesh, const SmoothParams& params)
+{
+    const bool flat = params.flatten && params.flatMove > 0 && params.voxel > 0;
+    return (params.rounds <= 0 && !flat) || !(params.maxMove > 0) || mesh.triangles.empty();
+}
+
+SmoothRings smoothRings(const TriangleMesh& mesh)
+{
+    Rings r(mesh);
+    const size_t nv = mesh.points.size();
+    std::vector<uint32_t> start(nv + 1, 0), ring;
+    for (size_t v = 0; v < nv; ++v)
+        start[v + 1] = start[v] + r.count[v];
+    ring.resize(start[nv]);
+    forEachPoint(nv,
+                 [&](size_t v) { std::copy_n(r.around(v), r.count[v], ring.data() + start[v]); });
+    // (the rings read the corners: they go last)
+    return SmoothRings{std::move(r.corners), std::move(start), std::move(ring),
+                       std::vector<uint8_t>(r.fixed.begin(), r.fixed.end())};
+}
+
 TriangleMesh smoothAlongNormals(TriangleMesh mesh, const SmoothParams& params)
 {
     const size_t nv = mesh.points.size();
     const bool flat = params.flatten && params.flatMove > 0 && params.voxel > 0;
-    if ((params.rounds <= 0 && !flat) || !(params.maxMove > 0) || mesh.triangles.empty())
-        return mesh;
+    if (smoothingLeaves(mesh, params)) return mesh;
     mesh.normals.clear(); // see Normals.h
 
     const Rings rings(mesh);

@@ -6,6 +6,11 @@
 
 #include <fluidsurf/Mesh.h>
 
+#include "post/Normals.h"
+
+#include <cstdint>
+#include <vector>
+
 namespace fluidsurf {
 namespace post {
 
@@ -36,6 +41,20 @@ struct SmoothParams
 /// move. Topology unchanged; no normals (Normals.h says why). The same bits for any thread
 /// count. mesh by value: its arrays become the result's (move a mesh in to spare the copy).
 TriangleMesh smoothAlongNormals(TriangleMesh mesh, const SmoothParams& params);
+
+/// What smoothAlongNormals walks, as plain arrays for the GPU's smoothing (backend/): each
+/// point's triangles (corners), its neighbours ascending, ring[ringStart[v], ringStart[v + 1]),
+/// and fixed[v]: on an open border or a non-manifold edge, where it stays.
+struct SmoothRings
+{
+    VertexTriangles corners;
+    std::vector<uint32_t> ringStart, ring;
+    std::vector<uint8_t> fixed;
+};
+SmoothRings smoothRings(const TriangleMesh& mesh);
+
+/// Whether params leave mesh as it is (smoothAlongNormals returns it unchanged, normals and all).
+bool smoothingLeaves(const TriangleMesh& mesh, const SmoothParams& params);
 
 /// Taubin rounds only (SmoothParams' first two fields).
 TriangleMesh smoothAlongNormals(TriangleMesh mesh, int iterations, double maxMove);

@@ -1,7 +1,10 @@
-// PostProcess.cc - the post-processing steps in their order (see PostProcess.h).
+// PostProcess.cc - the post-processing steps in their order (see PostProcess.h): the chain of
+// post/'s stages, the smoothing through the backend the context asks for (backend/Backend.h: on
+// the GPU with --device cuda or auto, the same points as on the CPU).
 #include <fluidsurf/Error.h>
 #include <fluidsurf/PostProcess.h>
 
+#include "backend/Backend.h"
 #include "post/CoverParticles.h"
 #include "post/Decimate.h"
 #include "post/LoopSubdivision.h"
@@ -173,7 +176,10 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
         post::SmoothParams sp;
         sp.rounds = params.smooth, sp.maxMove = kSmoothMove * voxel;
         sp.flatten = params.flatten, sp.flatMove = kFlatMove * voxel, sp.voxel = voxel;
-        mesh = post::smoothAlongNormals(std::move(mesh), sp);
+        std::string reason, ranOn;
+        const bool gpu = ctx.device() != Device::Cpu && backend::cudaUsable(&reason);
+        backend::runOn(ctx.device(), gpu, reason, ranOn,
+                       [&](backend::Backend& b) { b.smoothMesh(mesh, sp, ctx); });
         ctx.throwIfCancelled();
     }
     // Which particles the smoothed surface holds: its components' volume targets, and the
