@@ -3,11 +3,11 @@
 # library it may include only the public Vec3.h and Error.h and the plain math that both backends
 # compile (util/HostDevice.h, util/Floor.h, field/FieldMath.h, field/AnisotropicSums.h, field/GatherLayout.h,
 # classify/ClassRule.h, neighbors/CellSlot.h, mesh/CellPolygons.h, mesh/GradientMath.h,
-# post/SmoothSteps.h).
+# post/SmoothSteps.h, post/RayPlanes.h).
 # No OpenVDB, ever.
 set -euo pipefail
 cd "$1"
-allowed='^(facade/|fluidsurf/Vec3\.h|fluidsurf/Error\.h|util/HostDevice\.h|util/Floor\.h|field/FieldMath\.h|field/AnisotropicSums\.h|field/GatherLayout\.h|classify/ClassRule\.h|neighbors/CellSlot\.h|mesh/CellPolygons\.h|mesh/GradientMath\.h|post/SmoothSteps\.h|cub/|cuda_runtime|[a-z_]+(\.h)?$|[A-Z][A-Za-z]*\.cuh$)'
+allowed='^(facade/|fluidsurf/Vec3\.h|fluidsurf/Error\.h|util/HostDevice\.h|util/Floor\.h|field/FieldMath\.h|field/AnisotropicSums\.h|field/GatherLayout\.h|classify/ClassRule\.h|neighbors/CellSlot\.h|mesh/CellPolygons\.h|mesh/GradientMath\.h|post/SmoothSteps\.h|post/RayPlanes\.h|cub/|cuda_runtime|[a-z_]+(\.h)?$|[A-Z][A-Za-z]*\.cuh$)'
 bad=0
 while IFS= read -r line; do
     file=${line%%:*}
@@ -20,7 +20,7 @@ done < <(grep -rn '#include' cuda/src cuda/facade)
 # The shared math includes nothing of the library beyond the macro.
 if grep -n '#include "' lib/src/field/FieldMath.h lib/src/field/AnisotropicSums.h lib/src/field/GatherLayout.h \
     lib/src/util/Floor.h lib/src/classify/ClassRule.h lib/src/neighbors/CellSlot.h \
-    lib/src/mesh/CellPolygons.h lib/src/mesh/GradientMath.h lib/src/post/SmoothSteps.h |
+    lib/src/mesh/CellPolygons.h lib/src/mesh/GradientMath.h lib/src/post/SmoothSteps.h lib/src/post/RayPlanes.h |
     grep -v 'util/HostDevice.h' | grep -v 'GatherLayout.h:.*util/Floor.h' |
     grep -v 'AnisotropicSums.h:.*field/FieldMath.h'; then
     echo "the shared math headers include library headers"; bad=1

@@ -9,11 +9,13 @@
 //               gather-full baseline), for the particles of the last narrowBand or useParticles
 //   marchingCubes   a level set's mesh (mesh/MarchingCubes.h; the same bytes on either)
 //   smoothMesh      post-processing's smoothing (post/Smooth.h; the same points on either)
+//   componentsOfParticles   which mesh component holds each particle (post/ParticleVolumes.h)
 //
 // Selection, the Auto fallback and its reason live in one place too (selectBackend, runOn).
 #pragma once
 
 #include "neighbors/CellIndex.h"
+#include "post/ParticleVolumes.h"
 #include "post/Smooth.h"
 
 #include <fluidsurf/Context.h>
@@ -84,6 +86,14 @@ public:
     /// (its points only: the triangles stay, the normals go). Throws Error where the device
     /// fails, leaving mesh as it was but for its normals.
     virtual void smoothMesh(TriangleMesh& mesh, const post::SmoothParams& params, Context& ctx) = 0;
+
+    /// post::componentsOfParticles(mesh, ofPoint, c, particles, cellSize): the same answer on
+    /// either.
+    virtual std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
+                                                        const std::vector<uint32_t>& ofPoint,
+                                                        const post::Components& c,
+                                                        const ParticleVolumes& particles,
+                                                        double cellSize, Context& ctx) = 0;
 };
 
 std::unique_ptr<Backend> makeCpuBackend();

@@ -143,6 +143,15 @@ public:
         mesh = post::smoothAlongNormals(std::move(mesh), params);
     }
 
+    std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
+                                                const std::vector<uint32_t>& ofPoint,
+                                                const post::Components& c,
+                                                const ParticleVolumes& particles, double cellSize,
+                                                Context&) override
+    {
+        return post::componentsOfParticles(mesh, ofPoint, c, particles, cellSize);
+    }
+
 private:
     neighbors::CellIndex mOwned;
     const neighbors::CellIndex* mParticles = nullptr;

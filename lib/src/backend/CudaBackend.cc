@@ -17,6 +17,7 @@
 #include "facade/FieldGather.h"
 #include "facade/MarchingCubes.h"
 #include "facade/NarrowBandPipeline.h"
+#include "facade/RayCrossings.h"
 #include "facade/Smooth.h"
 #include "narrowband/NarrowBand.h"
 
@@ -442,6 +443,35 @@ public:
         std::vector<Vec3f> points(mesh.points.size());
         cuda::smoothPoints(in, points.data());
         mesh.points.swap(points);
+    }
+
+    std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
+                                                const std::vector<uint32_t>& ofPoint,
+                                                const post::Components& c,
+                                                const ParticleVolumes& particles, double cellSize,
+                                                Context&) override
+    {
+        std::vector<uint32_t> out(particles.count, post::kNoComponent);
+        const post::RayColumns g = post::rayColumns(mesh, particles, cellSize);
+        if (g.start.empty() || g.sorted.empty()) return out;
+        std::vector<uint8_t> outward(c.volume.size());
+        for (size_t k = 0; k < outward.size(); ++k)
+            outward[k] = c.volume[k] > 0;
+        cuda::RayInput in;
+        in.points = mesh.points.data(), in.pointCount = mesh.points.size();
+        in.triangles = mesh.triangles[0].data(), in.triangleCount = mesh.triangles.size();
+        in.ofPoint = ofPoint.data();
+        in.outward = outward.data(), in.componentCount = outward.size();
+        in.particles = particles.positions, in.particleCount = particles.count;
+        in.axis = g.axis, in.u = g.u, in.v = g.v;
+        in.u0 = g.u0, in.v0 = g.v0, in.cell = g.cell, in.nudgeU = g.nudgeU, in.nudgeV = g.nudgeV;
+        in.nu = g.nu, in.columnCount = g.start.size() - 1;
+        in.start = g.start.data(), in.tris = g.tris.data();
+        in.first = g.first.data(), in.sorted = g.sorted.data();
+        // a ray through more components than a device thread keeps: the CPU's answer
+        if (!cuda::componentsOnDevice(in, out.data()))
+            return post::componentsOfParticles(mesh, ofPoint, c, particles, cellSize);
+        return out;
     }
 
 private:

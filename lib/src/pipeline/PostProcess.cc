@@ -16,6 +16,8 @@
 #include "util/Vec3d.h"
 
 #include <cmath>
+#include <functional>
+#include <string>
 
 namespace fluidsurf {
 
@@ -140,6 +142,12 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
         before = post::findComponents(mesh);
     }
     std::vector<uint32_t> component = std::move(before.ofPoint); // (not needed there again)
+    // the steps that have a GPU form run on the device the context asks for (the same bytes)
+    std::string gpuReason, ranOn;
+    const bool gpu = ctx.device() != Device::Cpu && backend::cudaUsable(&gpuReason);
+    auto onDevice = [&](const std::function<void(backend::Backend&)>& work) {
+        backend::runOn(ctx.device(), gpu, gpuReason, ranOn, work);
+    };
     const bool decimating = params.decimate > 0 || params.decimateError > 0;
     if (!decimating) post::markClosed(before, mesh, component);
     if (decimating) {
@@ -176,10 +184,7 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
         post::SmoothParams sp;
         sp.rounds = params.smooth, sp.maxMove = kSmoothMove * voxel;
         sp.flatten = params.flatten, sp.flatMove = kFlatMove * voxel, sp.voxel = voxel;
-        std::string reason, ranOn;
-        const bool gpu = ctx.device() != Device::Cpu && backend::cudaUsable(&reason);
-        backend::runOn(ctx.device(), gpu, reason, ranOn,
-                       [&](backend::Backend& b) { b.smoothMesh(mesh, sp, ctx); });
+        onDevice([&](backend::Backend& b) { b.smoothMesh(mesh, sp, ctx); });
         ctx.throwIfCancelled();
     }
     // Which particles the smoothed surface holds: its components' volume targets, and the
@@ -189,8 +194,10 @@ TriangleMesh postProcessMesh(TriangleMesh mesh, const PostProcessParams& params,
     const bool covering = params.cover && particles;
     if ((params.volume == VolumeTarget::Particles && particles) || covering) {
         const auto t = ctx.scope("particles inside");
-        const std::vector<uint32_t> of =
-            post::componentsOfParticles(mesh, component, before, *particles, voxel);
+        std::vector<uint32_t> of;
+        onDevice([&](backend::Backend& b) {
+            of = b.componentsOfParticles(mesh, component, before, *particles, voxel, ctx);
+        });
         if (params.volume == VolumeTarget::Particles)
             post::useParticleVolumes(before, of, *particles);
         if (covering) outside = post::centresOutside(of, *particles);

@@ -13,6 +13,7 @@
 
 #include <fluidsurf/Error.h>
 
+#include "post/RayPlanes.h"
 #include "util/Lanes.h"
 #include "util/Memory.h"
 #include "util/RadixSort.h"
@@ -33,22 +34,6 @@ namespace fluidsurf {
 namespace post {
 
 namespace {
-
-/// The triangles binned by the cells of the plane across the rays that their boxes overlap
-/// (CSR). The rays run along `axis`, with (u, v) the next two axes in cyclic order, so that the
-/// normal's component along the ray is ab_u ae_v - ab_v ae_u.
-struct Columns
-{
-    int axis = 0, u = 1, v = 2;
-    double u0 = 0, v0 = 0, cell = 1;
-    int64_t nu = 0, nv = 0;
-    std::vector<uint32_t> start, tris;
-
-    int64_t cellOf(double x, double origin) const
-    {
-        return int64_t(std::floor((x - origin) / cell));
-    }
-};
 
 /// The axis most of the surface faces (the largest sum of |n_a| area): a surface that runs along
 /// the rays puts all its triangles in the few columns it lies in, and flat water does.
@@ -83,9 +68,8 @@ int rayAxis(const TriangleMesh& mesh)
                                                                 : 2;
 }
 
-Columns binTriangles(const TriangleMesh& mesh, double cellSize)
+void binTriangles(const TriangleMesh& mesh, double cellSize, RayColumns& g)
 {
-    Columns g;
     g.axis = rayAxis(mesh), g.u = (g.axis + 1) % 3, g.v = (g.axis + 2) % 3;
     double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
     for (const Vec3f& p : mesh.points)
@@ -141,7 +125,6 @@ Columns binTriangles(const TriangleMesh& mesh, double cellSize)
                     g.tris[count[c].fetch_add(1, std::memory_order_relaxed)] = uint32_t(t);
                 });
         });
-    return g;
 }
 
 /// The triangles across one column: each one's barycentric s and w and its crossing x as linear
@@ -211,6 +194,58 @@ __attribute__((target("avx2"))) void wideCrossings(const ColumnPlanes& p, double
 
 } // namespace
 
+RayColumns rayColumns(const TriangleMesh& mesh, const ParticleVolumes& particles, double cellSize)
+{
+    RayColumns g;
+    if (mesh.triangles.empty() || particles.count == 0) return g;
+    binTriangles(mesh, cellSize, g);
+    const int U = g.u, V = g.v;
+    // the ray starts a hair off the particle across it, so that it meets no edge or corner of
+    // the mesh (whose points are floats) and crosses each surface exactly once where it does
+    g.nudgeU = 1.4142135623e-7 * g.cell, g.nudgeV = 1.7320508075e-7 * g.cell;
+    // the particles sorted by column (in input order within one), so that each column's
+    // triangles are set up once and stay in cache for all its particles: a stable radix sort of
+    // (column, particle) on all threads (a counting sort on one thread took 0.3 s of the 13.1M
+    // drop's 0.54 s here on an H200 host's 16 threads; on 2 cores the two cost the same)
+    const size_t columns = g.start.size() - 1;
+    util::NoInitVector<uint64_t> keyed(particles.count); // column << 32 | particle
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.count, 1 << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i != r.end(); ++i) {
+                              const Vec3f& q = particles.positions[i];
+                              const int64_t cu = g.cellOf(double(q[U]) + g.nudgeU, g.u0),
+                                            cv = g.cellOf(double(q[V]) + g.nudgeV, g.v0);
+                              const bool in = cu >= 0 && cv >= 0 && cu < g.nu && cv < g.nv;
+                              // (outside every column: sorted last, as column `columns`)
+                              keyed[i] = uint64_t(in ? size_t(cv * g.nu + cu) : columns) << 32 | i;
+                          }
+                      });
+    int keyBits = 1;
+    while ((uint64_t(1) << keyBits) <= columns)
+        ++keyBits;
+    util::radixSortStable(keyed, keyBits, [](uint64_t k) { return k >> 32; });
+    // first[c]: where column c's particles begin, written by the first of them for it and the
+    // empty columns before it; then the particles' numbers alone
+    const size_t n = keyed.size();
+    g.first.resize(columns + 1);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n + 1, 1 << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t k = r.begin(); k != r.end(); ++k) {
+                              const size_t from = k == 0 ? 0 : size_t(keyed[k - 1] >> 32) + 1,
+                                           to = k == n ? columns : size_t(keyed[k] >> 32);
+                              for (size_t c = from; c <= to && c <= columns; ++c)
+                                  g.first[c] = uint32_t(k);
+                          }
+                      });
+    util::resizeInParallel(g.sorted, g.first[columns]);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, g.sorted.size(), 1 << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t k = r.begin(); k != r.end(); ++k)
+                              g.sorted[k] = uint32_t(keyed[k]);
+                      });
+    return g;
+}
+
 std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                                             const std::vector<uint32_t>& ofPoint,
                                             const Components& c, const ParticleVolumes& particles,
@@ -223,46 +258,12 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
         throw ValueError("componentsOfParticles: 4 doubles a register need a CPU with AVX2");
     std::vector<uint32_t> out(particles.count, kNoComponent);
     if (mesh.triangles.empty() || particles.count == 0) return out;
-    const Columns g = binTriangles(mesh, cellSize);
+    const RayColumns g = rayColumns(mesh, particles, cellSize);
     const int A = g.axis, U = g.u, V = g.v;
-    // the ray starts a hair off the particle across it, so that it meets no edge or corner of
-    // the mesh (whose points are floats) and crosses each surface exactly once where it does
-    const double nudgeU = 1.4142135623e-7 * g.cell, nudgeV = 1.7320508075e-7 * g.cell;
-    // the particles sorted by column (in input order within one), so that each column's
-    // triangles are set up once and stay in cache for all its particles: a stable radix sort
-    // of (column, particle) on all threads (a counting sort on one thread was a third of this
-    // step on 16: 1.7M particles, two passes of scattered writes)
+    const double nudgeU = g.nudgeU, nudgeV = g.nudgeV;
     const size_t columns = g.start.size() - 1;
-    util::NoInitVector<uint64_t> keyed(particles.count); // column << 32 | particle
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, particles.count, 1 << 14),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t i = r.begin(); i != r.end(); ++i) {
-                              const Vec3f& q = particles.positions[i];
-                              const int64_t cu = g.cellOf(double(q[U]) + nudgeU, g.u0),
-                                            cv = g.cellOf(double(q[V]) + nudgeV, g.v0);
-                              const bool in = cu >= 0 && cv >= 0 && cu < g.nu && cv < g.nv;
-                              // (outside every column: sorted last, as column `columns`)
-                              keyed[i] = uint64_t(in ? size_t(cv * g.nu + cu) : columns) << 32 | i;
-                          }
-                      });
-    int keyBits = 1;
-    while ((uint64_t(1) << keyBits) <= columns)
-        ++keyBits;
-    util::radixSortStable(keyed, keyBits, [](uint64_t k) { return k >> 32; });
-    // first[c]: where column c's particles begin (a column's start written by the first of its
-    // particles, with those of the empty columns before it)
-    std::vector<uint32_t> first(columns + 1);
-    const size_t n = keyed.size();
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n + 1, 1 << 14),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t k = r.begin(); k != r.end(); ++k) {
-                              const size_t from = k == 0 ? 0 : size_t(keyed[k - 1] >> 32) + 1,
-                                           to = k == n ? columns : size_t(keyed[k] >> 32);
-                              for (size_t c = from; c <= to && c <= columns; ++c)
-                                  first[c] = uint32_t(k);
-                          }
-                      });
-    auto particleAt = [&](uint32_t at) { return size_t(uint32_t(keyed[at])); };
+    const std::vector<uint32_t>& first = g.first;
+    const std::vector<uint32_t>& sorted = g.sorted;
     const bool wide = lanes == 4;
     tbb::parallel_for(
         tbb::blocked_range<size_t>(0, columns, 64), [&](const tbb::blocked_range<size_t>& r) {
@@ -276,26 +277,25 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
             ColumnPlanes planes;
             for (size_t col = r.begin(); col != r.end(); ++col) {
                 if (first[col] == first[col + 1] || g.start[col] == g.start[col + 1]) continue;
-                const double cu0 = g.u0 + double(int64_t(col) % g.nu) * g.cell,
-                             cv0 = g.v0 + double(int64_t(col) / g.nu) * g.cell;
+                const double cu0 = g.cornerU(col), cv0 = g.cornerV(col);
                 planes.clear();
                 for (uint32_t k = g.start[col]; k < g.start[col + 1]; ++k) {
                     const auto& t = mesh.triangles[g.tris[k]];
                     const uint32_t comp = ofPoint[t[0]];
                     if (comp == kNoComponent) continue;
-                    const Vec3d a = toVec3d(mesh.points[t[0]]), b = toVec3d(mesh.points[t[1]]),
-                                e = toVec3d(mesh.points[t[2]]);
-                    const Vec3d ab = b - a, ae = e - a;
-                    const double n = ab[U] * ae[V] - ab[V] * ae[U]; // the normal along the ray
-                    if (n == 0) continue;                           // edge-on to the ray
-                    const double au = a[U] - cu0, av = a[V] - cv0;
-                    planes.push({ae[V] / n, -ae[U] / n, (av * ae[U] - au * ae[V]) / n, -ab[V] / n,
-                                 ab[U] / n, (au * ab[V] - av * ab[U]) / n, a[A], ab[A], ae[A]},
-                                comp, n > 0 ? 1 : -1);
+                    double corner[3][3];
+                    for (int k = 0; k < 3; ++k)
+                        for (int a = 0; a < 3; ++a)
+                            corner[k][a] = double(mesh.points[t[k]][a]);
+                    RayPlane p;
+                    int sign;
+                    if (!rayPlane(corner[0], corner[1], corner[2], cu0, cv0, A, U, V, p, sign))
+                        continue; // edge-on to the ray
+                    planes.push({p.su, p.sv, p.s0, p.wu, p.wv, p.w0, p.xa, p.xs, p.xw}, comp, sign);
                 }
                 planes.pad();
                 for (uint32_t at = first[col]; at < first[col + 1]; ++at) {
-                    const size_t i = particleAt(at);
+                    const size_t i = sorted[at];
                     const Vec3f& q = particles.positions[i];
                     const double u = double(q[U]) + nudgeU - cu0, v = double(q[V]) + nudgeV - cv0,
                                  x0 = double(q[A]);

@@ -11,8 +11,38 @@
 
 #include <fluidsurf/PostProcess.h>
 
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
 namespace fluidsurf {
 namespace post {
+
+/// The rays of componentsOfParticles, for it and for another backend's: the triangles binned by
+/// the columns of the plane across the rays that their boxes overlap (CSR; the rays run along
+/// `axis`, with (u, v) the next two axes in cyclic order), and the particles sorted by column, in
+/// input order within one (those outside every column left out). Each ray starts a hair off its
+/// particle across it (nudgeU, nudgeV), so that it meets no edge or corner of the mesh.
+struct RayColumns
+{
+    int axis = 0, u = 1, v = 2;
+    double u0 = 0, v0 = 0, cell = 1, nudgeU = 0, nudgeV = 0;
+    int64_t nu = 0, nv = 0;
+    std::vector<uint32_t> start, tris;   ///< column c's triangles: tris[start[c], start[c + 1])
+    std::vector<uint32_t> first, sorted; ///< column c's particles: sorted[first[c], first[c + 1])
+
+    int64_t cellOf(double x, double origin) const
+    {
+        return int64_t(std::floor((x - origin) / cell));
+    }
+    /// the corner of column c, from which its rays' (u, v) are taken
+    double cornerU(size_t c) const { return u0 + double(int64_t(c) % nu) * cell; }
+    double cornerV(size_t c) const { return v0 + double(int64_t(c) / nu) * cell; }
+};
+
+/// The rays for mesh and particles (empty where either is); cellSize: the grid's cell, about an
+/// edge's length (at most about 4M columns whatever it is).
+RayColumns rayColumns(const TriangleMesh& mesh, const ParticleVolumes& particles, double cellSize);
 
 /// Which component of mesh (`ofPoint`: each point's; c.volume's sign: outward or a cavity's)
 /// holds each particle: of the outward closed components that a ray from the particle (along the

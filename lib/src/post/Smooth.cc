@@ -19,6 +19,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
@@ -238,22 +239,34 @@ util::NoInitVector<double> flatWeights(const Rings& rings, AreaNormals& normals,
 /// pointing inwards).
 void unfold(const TriangleMesh& mesh, const Rings& rings, const Points& start, Points& p)
 {
-    const size_t nv = p.size();
-    util::NoInitVector<uint8_t> back(nv);
-    auto turned = [&](const std::array<uint32_t, 3>& t) {
+    const size_t nv = p.size(), nt = mesh.triangles.size();
+    // Each triangle tested once, then each moved point told by its own (a point's test of each
+    // of its triangles did every triangle's three times: a sixth of the 13.1M drop's smoothing).
+    util::NoInitVector<uint8_t> back(nv), turned(nt);
+    auto turns = [&](const std::array<uint32_t, 3>& t) {
+        if (p[t[0]] == start[t[0]] && p[t[1]] == start[t[1]] && p[t[2]] == start[t[2]])
+            return false; // (as it was: not turned)
         const Vec3d before = (start[t[1]] - start[t[0]]).cross(start[t[2]] - start[t[0]]),
                     after = (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]);
         return after.dot(before) < kTurned * after.length() * before.length();
     };
     for (bool any = true; any;) {
-        forEachPoint(nv, [&](size_t v) {
-            back[v] = 0;
-            if (p[v] == start[v]) return;
-            for (uint32_t i = rings.corners.start[v]; i < rings.corners.start[v + 1] && !back[v];
-                 ++i)
-                back[v] = turned(mesh.triangles[rings.corners.tris[i]]);
-        });
-        any = std::find(back.begin(), back.end(), uint8_t(1)) != back.end();
+        forEachPoint(nt, [&](size_t t) { turned[t] = turns(mesh.triangles[t]); });
+        any = tbb::parallel_reduce(
+            tbb::blocked_range<size_t>(0, nv), false,
+            [&](const tbb::blocked_range<size_t>& r, bool found) {
+                for (size_t v = r.begin(); v != r.end(); ++v) {
+                    back[v] = 0;
+                    if (p[v] == start[v]) continue;
+                    for (uint32_t i = rings.corners.start[v];
+                         i < rings.corners.start[v + 1] && !back[v]; ++i)
+                        back[v] = turned[rings.corners.tris[i]];
+                    found |= back[v] != 0;
+                }
+                return found;
+            },
+            [](bool a, bool b) { return a || b; });
+        if (!any) break;
         forEachPoint(nv, [&](size_t v) {
             if (back[v]) p[v] = start[v];
         });
@@ -292,6 +305,9 @@ void flatten(const TriangleMesh& mesh, const Rings& rings, AreaNormals& normals,
         }
         return count ? sum / double(count) : p[v];
     };
+    // (each point's flat neighbours, factor, bound and unit normal made once instead: the same
+    // bits and no faster, 0.44 -> 0.46 s on the 13.1M drop's mesh here: the steps wait on
+    // memory, 13 MB of points a buffer, not on the loads and divisions that would save)
     for (int step = 0; step < kFlatSteps; ++step) {
         const bool fresh = step % kNormalSteps == 0;
         forEachPoint(active.size(), [&](size_t k) {
