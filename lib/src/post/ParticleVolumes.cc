@@ -92,9 +92,8 @@ void binTriangles(const TriangleMesh& mesh, double cellSize, RayColumns& g)
         c0[0] = g.cellOf(a[0], g.u0), c1[0] = g.cellOf(b[0], g.u0);
         c0[1] = g.cellOf(a[1], g.v0), c1[1] = g.cellOf(b[1], g.v0);
     };
-    // each column a triangle's box overlaps, f(column); counted and filled on all threads (a
-    // column's order does not matter: the crossings are gathered per component, by count and
-    // nearest)
+    // each column a triangle's box overlaps, f(column); counted and filled on all threads, then
+    // each column sorted
     auto forEachColumn = [&](size_t t, auto&& f) {
         int64_t c0[2], c1[2];
         box(mesh.triangles[t], c0, c1);
@@ -124,6 +123,14 @@ void binTriangles(const TriangleMesh& mesh, double cellSize, RayColumns& g)
                 forEachColumn(t, [&](size_t c) {
                     g.tris[count[c].fetch_add(1, std::memory_order_relaxed)] = uint32_t(t);
                 });
+        });
+    // each column's triangles in mesh order: the crossings of two components at the very same
+    // place (a sphere twice) are then met in the same order on every run and every backend, and
+    // the first met holds the particle
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, columns, 1 << 10), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t c = r.begin(); c != r.end(); ++c)
+                std::sort(g.tris.begin() + g.start[c], g.tris.begin() + g.start[c + 1]);
         });
 }
 
