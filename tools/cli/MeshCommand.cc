@@ -121,7 +121,7 @@ int runMeshFrames(const MeshOptions& o, const char* name, const ReadInput& read,
     const PipelineOptions& po = o.pipeline;
     const auto jobs = planMeshJobs(o);
     checkRunFiles(inputsOf(jobs), outputsOf(jobs), po.stats);
-    useHugePagesFor(inputBytes(jobs, shardOf(jobs, o.sequence.shard)), po.threads);
+    useHugePagesFor(inputBytes(jobs, shardOf(jobs, o.sequence.shard)), po.threads, interrupted);
     Context ctx;
     const auto threadLimit = po.setUp(ctx);
     prepareDevice(ctx.device()); // the CUDA context (0.1-0.3 s) made while the first file is read
@@ -427,7 +427,8 @@ Runner addReconstructCommand(CLI::App& app)
         std::vector<std::string> outputs = outputsOf(jobs), vdbOutputs = outputsOf(vdbJobs);
         outputs.insert(outputs.end(), vdbOutputs.begin(), vdbOutputs.end());
         checkRunFiles(inputsOf(jobs), outputs, po.stats);
-        useHugePagesFor(inputBytes(jobs, shardOf(jobs, o->sequence.shard)), po.threads);
+        useHugePagesFor(inputBytes(jobs, shardOf(jobs, o->sequence.shard)), po.threads,
+                        interrupted);
         ReconstructParams params = po.resolved();
         params.keepGrids = !vdbJobs.empty(); // without --vdb it goes before post-processing
         const std::vector<std::string> gridAttributes =

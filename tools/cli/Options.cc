@@ -63,6 +63,11 @@ void installInterruptHandler()
     std::thread(watchdog).detach();
     std::signal(SIGINT, onInterrupt);
     std::signal(SIGTERM, onInterrupt);
+    // (a process started again for huge pages comes with them blocked, any that came pending:
+    // ProcessMemory.cc)
+    sigset_t stops;
+    sigemptyset(&stops), sigaddset(&stops, SIGINT), sigaddset(&stops, SIGTERM);
+    pthread_sigmask(SIG_UNBLOCK, &stops, nullptr);
 }
 
 int interruptExitCode()

@@ -21,6 +21,9 @@
 
 #include <tbb/info.h>
 
+#include <csignal>
+#include <pthread.h>
+
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -72,7 +75,7 @@ void setTunables(const char* value)
 // and the start again is a loss: an H200 host's 16 threads, 5 runs alternating, the 1.7M frame
 // 0.844 -> 0.878 s (CUDA 1.120 -> 1.098 s), the 13.1M drop 1.983 -> 1.960 s (CUDA 2.068 ->
 // 2.139 s), medians; so only runs on fewer threads start again.
-void useHugePagesFor(uint64_t inputBytes, int threads)
+void useHugePagesFor(uint64_t inputBytes, int threads, bool (*interrupted)())
 {
 #ifdef __GLIBC__
     const char* choice = std::getenv("FLUIDSURF_HUGE_PAGES"); // "0" never, "1" always
@@ -81,19 +84,32 @@ void useHugePagesFor(uint64_t inputBytes, int threads)
     const bool worth = inputBytes >= kHugePagesFrom && used < kHugePagesBelowThreads;
     if ((choice && std::strcmp(choice, "0") == 0) || !(worth || always) || !gArgv) return;
     if (gStartedAgain) return;
-    const char* tunables = std::getenv("GLIBC_TUNABLES");
-    if (tunables && std::strstr(tunables, "glibc.malloc.hugetlb")) return; // the user's choice
+    const char* set = std::getenv("GLIBC_TUNABLES");
+    if (set && std::strstr(set, "glibc.malloc.hugetlb")) return; // the user's choice
     if (!hugePagesOnRequest()) return;
-    const std::string with = tunables && *tunables
-                                 ? std::string(tunables) + ":glibc.malloc.hugetlb=1"
-                                 : std::string("glibc.malloc.hugetlb=1");
-    setenv(kTunablesBefore, tunables ? tunables : "-", 1);
+    // (a copy: setenv may leave getenv's pointer stale)
+    const std::string tunables = set ? set : "";
+    const std::string with = tunables.empty() ? std::string("glibc.malloc.hugetlb=1")
+                                              : tunables + ":glibc.malloc.hugetlb=1";
+    // Ctrl-C and SIGTERM blocked across the start: one that comes then waits, pending, for the
+    // new process's handler (installInterruptHandler unblocks them) instead of ending it
+    // without a word or being lost with this process's flag; one that came already stops the
+    // run here, as it is.
+    sigset_t stops, before;
+    sigemptyset(&stops), sigaddset(&stops, SIGINT), sigaddset(&stops, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &stops, &before);
+    if (interrupted && interrupted()) {
+        pthread_sigmask(SIG_SETMASK, &before, nullptr);
+        return;
+    }
+    setenv(kTunablesBefore, set ? tunables.c_str() : "-", 1);
     setTunables(with.c_str());
     execv("/proc/self/exe", gArgv);
     unsetenv(kTunablesBefore); // not started again (no /proc): on as it is
-    setTunables(tunables);
+    setTunables(set ? tunables.c_str() : nullptr);
+    pthread_sigmask(SIG_SETMASK, &before, nullptr);
 #else
-    (void)inputBytes;
+    (void)inputBytes, (void)threads, (void)interrupted;
 #endif
 }
 

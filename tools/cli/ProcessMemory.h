@@ -26,7 +26,8 @@ constexpr int kHugePagesBelowThreads = 8;
 /// pages, or when GLIBC_TUNABLES names the tunable already. The process started again sees
 /// GLIBC_TUNABLES as the user had it (its children do not inherit the tunable). Why and when:
 /// ProcessMemory.cc.
-void useHugePagesFor(uint64_t inputBytes, int threads);
+/// interrupted: whether Ctrl-C or SIGTERM came already (the run then goes on as it is, to stop).
+void useHugePagesFor(uint64_t inputBytes, int threads, bool (*interrupted)() = nullptr);
 
 /// Drops from the process the resident pages of each loaded object's symbol tables (the
 /// read-only segment holding its dynamic symbols, their names and relocations), which the

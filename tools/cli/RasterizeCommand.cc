@@ -61,7 +61,8 @@ Runner addRasterizeCommand(CLI::App& app)
         const PipelineOptions& po = o->pipeline;
         const auto jobs = planVdbFrames(o->input, o->output, o->frames, "output");
         checkRunFiles(inputsOf(jobs), outputsOf(jobs), po.stats);
-        useHugePagesFor(inputBytes(jobs, shardOf(jobs, o->sequence.shard)), po.threads);
+        useHugePagesFor(inputBytes(jobs, shardOf(jobs, o->sequence.shard)), po.threads,
+                        interrupted);
         ReconstructParams params = po.resolved();
         Context ctx;
         const auto threadLimit = po.setUp(ctx);

@@ -1,6 +1,7 @@
 // PostProcess.cc - the post-processing steps in their order (see PostProcess.h): the chain of
-// post/'s stages, the smoothing through the backend the context asks for (backend/Backend.h: on
-// the GPU with --device cuda or auto, the same points as on the CPU).
+// post/'s stages; the smoothing and the test of which particles the surface holds through the
+// backend the context asks for (backend/Backend.h: on the GPU with --device cuda or auto, the
+// same bytes as on the CPU). Here, above post/, because the backend runs post/'s stages.
 #include <fluidsurf/Error.h>
 #include <fluidsurf/PostProcess.h>
 
