@@ -291,9 +291,9 @@ std::vector<uint32_t> componentsOfParticles(const TriangleMesh& mesh,
                     const uint32_t comp = ofPoint[t[0]];
                     if (comp == kNoComponent) continue;
                     double corner[3][3];
-                    for (int k = 0; k < 3; ++k)
+                    for (int j = 0; j < 3; ++j)
                         for (int a = 0; a < 3; ++a)
-                            corner[k][a] = double(mesh.points[t[k]][a]);
+                            corner[j][a] = double(mesh.points[t[j]][a]);
                     RayPlane p;
                     int sign;
                     if (!rayPlane(corner[0], corner[1], corner[2], cu0, cv0, A, U, V, p, sign))
