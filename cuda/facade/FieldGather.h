@@ -63,8 +63,9 @@ struct GatherTimes
 /// field is used. False also without a usable device.
 bool gatherFits(double voxelSize, double influenceRadius);
 
-/// phi for the 512 voxels of every leaf (leafCount * 512 values, leaf after leaf, OpenVDB's voxel
-/// order); inactive voxels hold the background. Throws fluidsurf::Error on CUDA errors.
+/// phi at the active voxels of the leaves, leaf after leaf in OpenVDB's voxel order (as many
+/// values as the masks have bits: a thin band fills a leaf to some 15%, and only these travel
+/// back). Throws fluidsurf::Error on CUDA errors.
 std::vector<float> gatherField(const GatherInput& input, GatherTimes* times = nullptr,
                                void* stream = nullptr);
 
@@ -78,6 +79,14 @@ struct AnisotropicInput
     /// yt10 (field.density): 1 a kernel, V_j W's factor, summed where the radii would be
     const float* weight = nullptr;
     double reach = 0; ///< the most any kernel reaches, world units
+    /// Packed (non-null; backend/PackKernels.h): bit j % 32 of fresh[j / 32] is set where kernel
+    /// j's a, extent and weight differ from kernel j - 1's (kernel 0's always), and a, extent and
+    /// weight hold only those kernels' entries, in order; freshBefore[w] counts the bits set in
+    /// the words before w. A frame's interior kernels are one sphere, so most repeat the kernel
+    /// before them and three quarters of the upload stay on the host.
+    const uint32_t* fresh = nullptr;
+    const uint32_t* freshBefore = nullptr;
+    size_t freshCount = 0; ///< the bits set: the entries a, extent and weight hold
 };
 
 /// The ssp07-aniso gather on the device (AnisotropicGather.cu): the kernels uploaded once, then
@@ -91,8 +100,8 @@ public:
     AnisotropicGather(const AnisotropicGather&) = delete;
     AnisotropicGather& operator=(const AnisotropicGather&) = delete;
 
-    /// 512 values per leaf (inactive voxels: the background); times: this call's, the kernels'
-    /// upload counted in the first.
+    /// phi at the active voxels, leaf after leaf in voxel order (as many as the masks' bits);
+    /// times: this call's, the kernels' upload counted in the first.
     std::vector<float> evaluate(const int32_t* leafOrigins, const uint64_t* leafActive,
                                 size_t leafCount, GatherTimes* times = nullptr);
 

@@ -77,7 +77,8 @@ public:
     const ClassCounts& classCounts() const;
     const std::vector<uint32_t>& isolatedParticles() const;
 
-    /// After run(): phi at the active voxels of more leaves (band completion), 512 per leaf.
+    /// After run(): phi at the active voxels of more leaves (band completion), as gatherField
+    /// returns them (active voxels only, leaf after leaf).
     std::vector<float> evaluate(const int32_t* origins, const uint64_t* masks, size_t leafCount);
 
     /// GPU time per stage (CUDA events, milliseconds), run() and evaluate() calls in order.

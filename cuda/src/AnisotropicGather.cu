@@ -30,7 +30,8 @@ struct Params
     const unsigned long long* leafActive;
     float invR2;
     field::FieldConstants constants;
-    float* out;
+    float* out;                        ///< the active voxels' phi, leaf after leaf
+    const uint32_t* activeBefore;      ///< per leaf: the active voxels of the leaves before it
     const unsigned long long* offsets; ///< per leaf of the batch: where its kernels go
     float4* kernels;                   ///< 3 a kernel: (c, r), (a0..a3), (a4, a5, 0, 0)
     uint32_t* counts;                  ///< countKernel: kernels per leaf
@@ -150,13 +151,9 @@ __global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
         kernels[3 * at + 1] = make_float4(a[0], a[1], a[2], a[3]);
         kernels[3 * at + 2] = make_float4(a[4], a[5], 0.f, 0.f);
     });
-    for (int v = threadIdx.x; v < 512; v += kThreads) {
-        const bool on = (p.leafActive[8 * leaf + (v >> 6)] >> (v & 63)) & 1ull;
-        if (on)
+    for (int v = threadIdx.x; v < 512; v += kThreads)
+        if ((p.leafActive[8 * leaf + (v >> 6)] >> (v & 63)) & 1ull)
             sh.active[atomicAdd(&sh.activeCount, 1)] = (unsigned short)(v);
-        else
-            p.out[leaf * 512 + v] = p.constants.background;
-    }
     __syncthreads();
     const uint32_t total = sh.total;
     const bool radii = p.cells.radii != nullptr || p.weight != nullptr;
@@ -180,12 +177,35 @@ __global__ void __launch_bounds__(kThreads) fieldKernel(Params p)
             else
                 sumTile<false>(s, sh, n, vx, vy, vz, p.invR2);
         }
-        if (mine)
-            p.out[leaf * 512 + v] =
+        if (mine) {
+            // The voxel's rank among the leaf's active voxels: the bits below it.
+            const unsigned long long* words = p.leafActive + 8 * leaf;
+            uint32_t rank = __popcll(words[v >> 6] & ((1ull << (v & 63)) - 1));
+            for (int w = 0; w < (v >> 6); ++w)
+                rank += __popcll(words[w]);
+            p.out[p.activeBefore[leaf] + rank] =
                 field::fieldValue(field::toSums(s.w, s.d0, s.d1, s.d2, s.r, s.g0, s.g1, s.g2, s.m0,
                                                 s.m1, s.m2, s.m3, s.m4, s.m5),
                                   p.constants);
+        }
     }
+}
+
+/// Kernel j's a, extent and weight from the packed entries (AnisotropicInput::fresh): the last
+/// entry at or before j.
+__global__ void unpackKernel(const uint32_t* fresh, const uint32_t* freshBefore, size_t n,
+                             const float* a, const float* extent, const float* weight, float* aOut,
+                             float* extentOut, float* weightOut)
+{
+    const size_t j = size_t(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (j >= n) return;
+    const uint32_t bits = fresh[j >> 5] & (0xffffffffu >> (31 - (j & 31)));
+    const size_t e = freshBefore[j >> 5] + __popc(bits) - 1; // (kernel 0 is always fresh)
+    for (int k = 0; k < 6; ++k)
+        aOut[6 * j + k] = a[6 * e + k];
+    for (int k = 0; k < 3; ++k)
+        extentOut[3 * j + k] = extent[3 * e + k];
+    if (weight) weightOut[j] = weight[e];
 }
 
 /// Gathered kernels a batch of leaves may hold at once (48 bytes each: 48 MiB).
@@ -199,7 +219,6 @@ struct AnisotropicGather::Impl
     Stream stream;
     DeviceMemory mem;
     Params p{};
-    float background = 0;
     double kernelUploadMs = 0; ///< counted in the first evaluate()'s upload
 };
 
@@ -215,14 +234,35 @@ AnisotropicGather::AnisotropicGather(const AnisotropicInput& in)
     StageEvents events(mImpl->stream.get());
     Params& p = mImpl->p;
     p.cells = uploadCells(g, mem);
-    p.a = mem.upload(in.a, 6 * g.particleCount);
-    p.extent = mem.upload(in.extent, 3 * g.particleCount);
-    p.weight = in.weight ? mem.upload(in.weight, g.particleCount) : nullptr;
+    const size_t n = g.particleCount;
+    if (!in.fresh) {
+        p.a = mem.upload(in.a, 6 * n);
+        p.extent = mem.upload(in.extent, 3 * n);
+        p.weight = in.weight ? mem.upload(in.weight, n) : nullptr;
+    } else if (n > 0) {
+        if (!(in.freshCount >= 1 && in.freshCount <= n && (in.fresh[0] & 1u)))
+            throw Error("AnisotropicGather: invalid packed kernels");
+        const size_t m = in.freshCount, words = (n + 31) / 32;
+        const uint32_t* fresh = mem.upload(in.fresh, words);
+        const uint32_t* before = mem.upload(in.freshBefore, words);
+        const float* a = mem.upload(in.a, 6 * m);
+        const float* extent = mem.upload(in.extent, 3 * m);
+        const float* weight = in.weight ? mem.upload(in.weight, m) : nullptr;
+        float* aOut = mem.alloc<float>(6 * n);
+        float* extentOut = mem.alloc<float>(3 * n);
+        float* weightOut = weight ? mem.alloc<float>(n) : nullptr;
+        unpackKernel<<<unsigned((n + 255) / 256), 256, 0, mImpl->stream.get()>>>(
+            fresh, before, n, a, extent, weight, aOut, extentOut, weightOut);
+        FLUIDSURF_CUDA_CHECK(cudaGetLastError());
+        for (const void* packed : {(const void*)fresh, (const void*)before, (const void*)a,
+                                   (const void*)extent, (const void*)weight})
+            if (packed) mem.release(packed);
+        p.a = aOut, p.extent = extentOut, p.weight = weightOut;
+    }
     p.reach = in.reach, p.dx = g.field.voxelSize;
     const double R = g.field.influenceRadius;
     p.invR2 = float(1 / (R * R));
     p.constants = fieldConstants(g.field, g.radii != nullptr || in.weight != nullptr);
-    mImpl->background = g.field.background;
     events.mark("kernels");
     mImpl->kernelUploadMs = events.stages()[0].second;
 }
@@ -233,7 +273,7 @@ std::vector<float> AnisotropicGather::evaluate(const int32_t* leafOrigins,
                                                const uint64_t* leafActive, size_t leafCount,
                                                GatherTimes* times)
 {
-    std::vector<float> out(leafCount * 512, mImpl->background);
+    std::vector<float> out;
     if (leafCount == 0) return out;
     const cudaStream_t stream = mImpl->stream.get();
     DeviceMemory& mem = mImpl->mem;
@@ -242,7 +282,11 @@ std::vector<float> AnisotropicGather::evaluate(const int32_t* leafOrigins,
     p.leafOrigins = mem.upload(leafOrigins, 3 * leafCount);
     p.leafActive =
         mem.upload(reinterpret_cast<const unsigned long long*>(leafActive), 8 * leafCount);
-    p.out = mem.alloc<float>(out.size());
+    size_t active = 0;
+    uint32_t* activeBefore = activeOffsets(p.leafActive, leafCount, active, mem, stream);
+    p.activeBefore = activeBefore;
+    out.resize(active);
+    p.out = mem.alloc<float>(active);
     events.mark("upload");
 
     // How many kernels each leaf gathers, then the leaves in batches whose scratch fits.
@@ -265,8 +309,9 @@ std::vector<float> AnisotropicGather::evaluate(const int32_t* leafOrigins,
                                          cudaMemcpyDeviceToHost, stream));
     events.mark("download");
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(stream));
-    for (const void* scratch : {(const void*)p.leafOrigins, (const void*)p.leafActive,
-                                (const void*)p.out, (const void*)p.counts})
+    for (const void* scratch :
+         {(const void*)p.leafOrigins, (const void*)p.leafActive, (const void*)p.activeBefore,
+          (const void*)p.out, (const void*)p.counts})
         mem.release(scratch);
     if (times) {
         const auto stages = events.stages();

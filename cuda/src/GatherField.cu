@@ -411,7 +411,7 @@ DeviceCells uploadCells(const GatherInput& in, DeviceMemory& mem)
 
 std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* streamPtr)
 {
-    std::vector<float> out(in.leafCount * 512, in.field.background);
+    std::vector<float> out;
     if (in.leafCount == 0) return out;
     if (!(in.cellSize > 0 && in.field.voxelSize > 0 && in.field.influenceRadius > 0))
         throw Error("gatherField: invalid sizes");
@@ -426,10 +426,13 @@ std::vector<float> gatherField(const GatherInput& in, GatherTimes* times, void* 
     const unsigned long long* masks =
         mem.upload(reinterpret_cast<const unsigned long long*>(in.leafActive), 8 * in.leafCount);
     const field::FieldConstants constants = fieldConstants(in.field, in.radii != nullptr);
-    float* values = mem.alloc<float>(out.size());
+    size_t active = 0;
+    const uint32_t* offsets = activeOffsets(masks, in.leafCount, active, mem, stream);
+    out.resize(active);
+    float* values = mem.alloc<float>(active);
     events.mark("upload");
     gatherLeaves(cells, origins, masks, in.leafCount, in.field.voxelSize, constants, values, mem,
-                 stream);
+                 stream, offsets);
     events.mark("gather kernel");
     FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float),
                                          cudaMemcpyDeviceToHost, stream));

@@ -170,21 +170,25 @@ std::vector<float> NarrowBandPipeline::evaluate(const int32_t* origins, const ui
 {
     Impl& m = *mImpl;
     if (!m.ran) throw Error("NarrowBandPipeline::evaluate: run() first");
-    std::vector<float> out(leafCount * 512, m.constants.background);
+    std::vector<float> out;
     if (leafCount == 0) return out;
     StageEvents events(m.stream);
     const int32_t* o = m.mem->upload(origins, 3 * leafCount);
     const unsigned long long* k =
         m.mem->upload(reinterpret_cast<const unsigned long long*>(masks), 8 * leafCount);
-    float* values = m.mem->alloc<float>(out.size());
-    gatherLeaves(m.cells, o, k, leafCount, m.voxelSize, m.constants, values, *m.mem, m.stream);
+    size_t active = 0;
+    uint32_t* offsets = activeOffsets(k, leafCount, active, *m.mem, m.stream);
+    out.resize(active);
+    float* values = m.mem->alloc<float>(active);
+    gatherLeaves(m.cells, o, k, leafCount, m.voxelSize, m.constants, values, *m.mem, m.stream,
+                 offsets);
     FLUIDSURF_CUDA_CHECK(cudaMemcpyAsync(out.data(), values, out.size() * sizeof(float),
                                          cudaMemcpyDeviceToHost, m.stream));
     events.mark("completion gather");
     FLUIDSURF_CUDA_CHECK(cudaStreamSynchronize(m.stream));
-    m.mem->release(o);
-    m.mem->release(k);
-    m.mem->release(values);
+    for (const void* scratch :
+         {(const void*)o, (const void*)k, (const void*)offsets, (const void*)values})
+        m.mem->release(scratch);
     m.collect(events);
     return out;
 }

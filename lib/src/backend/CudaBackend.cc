@@ -8,6 +8,7 @@
 
 #ifdef FLUIDSURF_HAS_CUDA
 #include "backend/CpuStages.h"
+#include "backend/PackKernels.h"
 #include "classify/Classify.h"
 #include "field/GatherField.h"
 #include "mesh/MarchingCubes.h"
@@ -38,7 +39,8 @@ namespace {
 using LeafT = openvdb::FloatTree::LeafNodeType;
 
 /// The values of every active voxel of tree from compute(origins, masks, leafCount), which
-/// returns 512 values per leaf. Returns the number of active voxels.
+/// returns the active voxels' values, leaf after leaf in voxel order (the facade's). Returns the
+/// number of active voxels.
 template <typename Compute> size_t fillActiveVoxels(openvdb::FloatTree& tree, Compute&& compute)
 {
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(tree);
@@ -51,12 +53,25 @@ template <typename Compute> size_t fillActiveVoxels(openvdb::FloatTree& tree, Co
         for (int w = 0; w < 8; ++w)
             masks[8 * i + w] = leaf.getValueMask().template getWord<uint64_t>(w);
     });
+    std::vector<size_t> before(n + 1, 0); // where each leaf's values start
+    for (size_t i = 0; i < n; ++i) {
+        size_t count = 0;
+        for (int w = 0; w < 8; ++w)
+            count += size_t(__builtin_popcountll(masks[8 * i + w]));
+        before[i + 1] = before[i] + count;
+    }
     const std::vector<float> values = compute(origins.data(), masks.data(), n);
+    if (values.size() != before[n])
+        throw Error("CUDA backend: the device returned " + std::to_string(values.size()) +
+                    " values for " + std::to_string(before[n]) + " active voxels");
     leaves.foreach ([&](LeafT& leaf, size_t i) {
-        for (auto v = leaf.beginValueOn(); v; ++v)
-            v.setValue(values[i * 512 + v.pos()]);
+        float* buffer = leaf.buffer().data();
+        const float* in = &values[before[i]];
+        for (int w = 0; w < 8; ++w)
+            for (uint64_t b = masks[8 * i + w]; b; b &= b - 1)
+                buffer[64 * w + __builtin_ctzll(b)] = *in++;
     });
-    return tree.activeVoxelCount();
+    return before[n];
 }
 
 cuda::FieldSettings fieldSettings(const Params& params, const Level& level)
@@ -290,13 +305,15 @@ public:
         const size_t evaluations =
             fillActiveVoxels(tree, [&](const int32_t* origins, const uint64_t* masks, size_t n) {
                 if (!mAnisoGather) {
-                    const field::AnisotropicKernels& table = mAniso->table;
+                    const PackedKernels packed = packKernels(mAniso->table);
                     cuda::AnisotropicInput in;
                     in.gather =
                         gatherInput(mAniso->kernels.centres, nullptr, nullptr, 0, params, level);
-                    in.a = table.a.data(), in.extent = table.extent.data();
-                    in.weight = table.weight.empty() ? nullptr : table.weight.data();
-                    in.reach = table.reach;
+                    in.a = packed.a.data(), in.extent = packed.extent.data();
+                    in.weight = packed.weight.empty() ? nullptr : packed.weight.data();
+                    in.fresh = packed.fresh.data(), in.freshBefore = packed.freshBefore.data();
+                    in.freshCount = packed.freshCount();
+                    in.reach = mAniso->table.reach;
                     mAnisoGather = std::make_unique<cuda::AnisotropicGather>(in);
                 }
                 return mAnisoGather->evaluate(origins, masks, n, &times);
