@@ -4,8 +4,7 @@
 // counts add up. On a pipeline's own table (a jittered drop: interior spheres) and on made-up
 // tables at the words' edges.
 #include "backend/PackKernels.h"
-#include "anisotropy/KernelShapes.h"
-#include "classify/Classify.h"
+#include "unit/field/PipelineKernels.h"
 
 #include <fluidsurf/Scenes.h>
 
@@ -115,23 +114,14 @@ TEST(PackKernels, APipelinesTableUnpacksOnAnyThreadCount)
         Params p = Params::fromRadius(sp.radius);
         p.field = kind;
         Context ctx;
-        const double cellSize = std::min(p.influenceRadius, p.smoothingLength);
-        const neighbors::CellIndex index =
-            neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), cellSize, ctx);
-        const classify::Classification classes = classify::classifyParticles(index, p, ctx);
-        const anisotropy::ShapeParams shapeParams = anisotropy::shapeParams(p);
-        const anisotropy::KernelShapes shapes =
-            anisotropy::kernelShapes(index, classes, shapeParams, ctx);
-        const anisotropy::KernelParticles kp = anisotropy::kernelParticles(
-            index, classes, shapes, p.keepIsolated, p.influenceRadius, ctx);
-        const field::AnisotropicKernels t = field::anisotropicKernels(
-            kp.centres, kp.shapes.data(), anisotropy::maxReach(shapeParams) * p.influenceRadius, p);
+        const auto made = testing_support::pipelineKernels(ps, p, ctx);
+        const field::AnisotropicKernels& t = made->table;
         const backend::PackedKernels many = backend::packKernels(t);
         const size_t set = expectUnpacksTo(many, t);
         // The drop's interior kernels are one sphere: at least the surface's are fresh, and far
         // from all of them.
-        EXPECT_GE(set, shapes.stretched);
-        EXPECT_LT(set, kp.centres.size() / 2);
+        EXPECT_GE(set, made->shapes.stretched);
+        EXPECT_LT(set, made->particles.centres.size() / 2);
         tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
         const backend::PackedKernels single = backend::packKernels(t);
         EXPECT_EQ(single.fresh, many.fresh);

@@ -7,6 +7,7 @@
 #include "classify/Classify.h"
 #include "field/FieldMath.h"
 #include "field/GatherField.h"
+#include "unit/field/PipelineKernels.h"
 
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MeshCheck.h>
@@ -244,17 +245,8 @@ void expectTheSameBitsEverywhere(FieldKind kind)
     SCOPED_TRACE(fieldName(kind));
     Context ctx;
     const RasterizeResult band = rasterizeParticles(ps, p, ctx); // the pipeline's own values
-    const double cellSize = std::min(p.influenceRadius, p.smoothingLength);
-    const neighbors::CellIndex index =
-        neighbors::buildCellIndex(ps.positions.data(), nullptr, ps.size(), cellSize, ctx);
-    const classify::Classification classes = classify::classifyParticles(index, p, ctx);
-    const anisotropy::ShapeParams shapeParams = anisotropy::shapeParams(p);
-    const anisotropy::KernelShapes shapes =
-        anisotropy::kernelShapes(index, classes, shapeParams, ctx);
-    const anisotropy::KernelParticles kp =
-        anisotropy::kernelParticles(index, classes, shapes, p.keepIsolated, p.influenceRadius, ctx);
-    const field::AnisotropicKernels kernels = field::anisotropicKernels(
-        kp.centres, kp.shapes.data(), anisotropy::maxReach(shapeParams) * p.influenceRadius, p);
+    const auto made = testing_support::pipelineKernels(ps, p, ctx);
+    const field::AnisotropicKernels& kernels = made->table;
     const Level level = p.level();
     auto evaluate = [&](bool wide, bool checkerboard) {
         auto tree =
