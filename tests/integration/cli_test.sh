@@ -244,6 +244,12 @@ expect_error "mesh: unknown mesher" "mesher" "$BIN" mesh "$T/drop_ls.vdb" --mesh
 check "mesh: no output after errors" bash -c "[ ! -e '$T/bad.obj' ] && [ ! -e '$T/bad.stl' ]"
 # --device: auto always works; cuda works on a GPU machine and otherwise fails with one clear line.
 check "rasterize --device auto" "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/auto.vdb" --device auto -q
+# A frame far below the GPU's threshold (README, "Which device") runs on the CPU, GPU or not, says
+# why in -v, and writes the CPU's mesh; a sequence's frames count together.
+"$BIN" reconstruct "$T/drop.bgeo" -r 0.01 -o "$T/small_cpu.ply" -q
+check "reconstruct --device auto: a small frame on the CPU, saying why" bash -c "'$BIN' reconstruct '$T/drop.bgeo' -r 0.01 -o '$T/small_auto.ply' --device auto -v 2>&1 | grep -q 'field on cpu (auto: .* particles, under the .*M the GPU needs to pay at [0-9]* thread'"
+check "reconstruct --device auto: the CPU's mesh" cmp "$T/small_cpu.ply" "$T/small_auto.ply"
+check "reconstruct --device auto: a sequence's frames count together" bash -c "'$BIN' reconstruct '$T/seq_{:04}.bgeo' --frames 1-3 -o '$T/sa_{:04}.ply' --device auto -v 2>&1 | grep -q 'auto: 3 frames of'"
 if "$BIN" rasterize "$T/block.bgeo" -r 0.01 -o "$T/gpu.vdb" --device cuda -q 2>/dev/null; then
     check "rasterize --device cuda wrote a level set" test -s "$T/gpu.vdb"
     # The device pipeline gives the CPU's classes and active voxels (the summary line), and a

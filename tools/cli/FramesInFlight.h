@@ -108,6 +108,7 @@ template <typename Frame> void runFramesInFlight(FrameRun& r, const FrameSteps<F
     stages.read = [&](size_t k, size_t s) {
         Frame& f = slots[s];
         r.options.configure(f.ctx);
+        f.ctx.setFramesInRun(r.todo.size()); // (Device::Auto's rule: one context serves them)
         f.ctx.timing().clear();
         f.job = r.todo[k], f.error = nullptr;
         if (steps.prepare) steps.prepare(f);

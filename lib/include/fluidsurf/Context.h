@@ -21,11 +21,21 @@
 namespace fluidsurf {
 
 /// Where the field is computed. Cuda runs the narrow band on the first GPU (sort, classify, band,
-/// gather; gather-full only gathers there); Auto picks Cuda when the library was built with CUDA
-/// and a usable GPU is present, else Cpu, and falls back to the CPU (saying why) when CUDA fails.
+/// gather; gather-full only gathers there); Auto picks Cuda when the library was built with CUDA,
+/// a usable GPU is present and the run is large enough for it to pay (autoGpuParticles), else
+/// Cpu, and falls back to the CPU (saying why) when CUDA fails.
 enum class Device { Cpu, Cuda, Auto };
 const char* deviceName(Device d);               ///< "cpu", "cuda", "auto"
 Device deviceFromName(const std::string& name); ///< ValueError for unknown names
+
+/// Device::Auto's rule (README, "Which device"): a frame of particles goes to the GPU when the
+/// run's particles, the frame's times Context::framesInRun(), reach this many for `threads` host
+/// threads: 1M x (threads / 4)^1.45, about 7.5M at 16. Measured on an H200 host (whole processes,
+/// the default pipeline, generated drops): one frame ran faster on its CPU below 1M particles at 4
+/// threads, 2-3M at 8 and 7-8M at 16, where the GPU's fixed costs (its context, 0.2-0.3 s a
+/// process, and the copies) outweigh what it saves; ten frames with one context, below
+/// 2.5M particles in all at 16 threads.
+double autoGpuParticles(int threads);
 
 /// The run was cancelled by the progress callback (or Ctrl-C in the CLI).
 class Cancelled : public Error
@@ -107,6 +117,11 @@ public:
     Device device() const { return mDevice; }
     void setDevice(Device d) { mDevice = d; }
 
+    /// Device::Auto's hint: the frames this run converts, which share one CUDA context's making
+    /// (autoGpuParticles). 1 unless a front end says more (the CLI: the frames it has to do).
+    size_t framesInRun() const { return mFramesInRun; }
+    void setFramesInRun(size_t n) { mFramesInRun = n > 0 ? n : 1; }
+
     /// At most this many worker threads while a stage runs (0: all cores). The CLI's -j.
     int threads() const { return mThreads; }
     /// ValueError outside [0, kMaxThreads]: TBB's arenas are not made for more (past 65536
@@ -147,6 +162,7 @@ public:
 private:
     Device mDevice;
     int mThreads = 0;
+    size_t mFramesInRun = 1;
     size_t mMemoryBudget = 0;
     TimingTree mTiming;
     ProgressCallback mProgress;

@@ -104,6 +104,24 @@ std::unique_ptr<Backend> makeCudaBackend();
 /// creates the CUDA context (0.1-0.3 s); later calls return the same answer at no cost.
 bool cudaUsable(std::string* reason = nullptr, std::string* deviceName = nullptr);
 
+/// Device::Auto made concrete for one frame of `particles` while this lives: ctx's device is
+/// Cpu where the run is too small for the GPU to pay (autoGpuParticles, at ctx's threads), and
+/// Auto again afterwards; any other device is left alone. why(): the reason, "" when nothing
+/// changed.
+class AutoDevice
+{
+public:
+    AutoDevice(Context& ctx, size_t particles);
+    ~AutoDevice();
+    AutoDevice(const AutoDevice&) = delete;
+    AutoDevice& operator=(const AutoDevice&) = delete;
+    const std::string& why() const { return mWhy; }
+
+private:
+    Context& mCtx;
+    std::string mWhy;
+};
+
 /// Run work on the backend that ctx.device() asks for: Cpu; Cuda (Error when there is no usable
 /// GPU); Auto (the GPU when usable, else the CPU). With Auto, a CUDA failure other than bad input
 /// or a cancel calls fallingBack (if given) and reruns work on the CPU. ranOn: the backend's

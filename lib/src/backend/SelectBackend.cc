@@ -1,9 +1,15 @@
 // SelectBackend.cc - which backend runs, in one place: Device::Cpu, Cuda (an error without a
-// usable GPU) or Auto (the GPU when usable; the CPU again, saying why, when CUDA fails mid-way).
+// usable GPU) or Auto (the GPU when usable and the run large enough for it to pay; the CPU
+// again, saying why, when CUDA fails mid-way).
 #include "backend/Backend.h"
 
 #include <fluidsurf/Rasterize.h>
 
+#include <tbb/info.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <future>
 #include <mutex>
 #include <utility>
@@ -39,7 +45,40 @@ void waitForDevice()
     if (f.valid()) f.wait();
 }
 
+double autoGpuParticles(int threads)
+{
+    return 1e6 * std::pow(std::max(threads, 1) / 4.0, 1.45);
+}
+
 namespace backend {
+
+AutoDevice::AutoDevice(Context& ctx, size_t particles) : mCtx(ctx)
+{
+    if (ctx.device() != Device::Auto) return;
+    const int cores = tbb::info::default_concurrency(); // the cores this process may use
+    const int threads = ctx.threads() > 0 ? std::min(ctx.threads(), cores) : cores;
+    const double run = double(particles) * double(ctx.framesInRun());
+    const double pays = autoGpuParticles(threads);
+    if (run >= pays) return;
+    char text[200];
+    if (ctx.framesInRun() > 1)
+        std::snprintf(text, sizeof(text),
+                      "auto: %zu frames of %.2gM particles, under the %.2gM the GPU needs to pay "
+                      "at %d thread%s",
+                      ctx.framesInRun(), double(particles) / 1e6, pays / 1e6, threads,
+                      threads == 1 ? "" : "s");
+    else
+        std::snprintf(text, sizeof(text),
+                      "auto: %.2gM particles, under the %.2gM the GPU needs to pay at %d thread%s",
+                      double(particles) / 1e6, pays / 1e6, threads, threads == 1 ? "" : "s");
+    mWhy = text;
+    ctx.setDevice(Device::Cpu);
+}
+
+AutoDevice::~AutoDevice()
+{
+    if (!mWhy.empty()) mCtx.setDevice(Device::Auto);
+}
 
 void runOn(Device device, bool gpuUsable, const std::string& gpuReason, std::string& ranOn,
            const std::function<void(Backend&)>& work, const std::function<void()>& fallingBack)

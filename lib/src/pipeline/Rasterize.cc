@@ -328,7 +328,11 @@ RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params, 
     openvdb::initialize();
     if (ctx.device() == Device::Cuda && params.method == FieldMethod::Scatter)
         throw ValueError("the scatter baseline runs on the CPU only (--device cpu)");
-    return util::withThreads(ctx, [&] { return rasterize(ps, params, ctx, source); });
+    const backend::AutoDevice autoDevice(ctx, ps.size()); // (Auto: the CPU for a small run)
+    RasterizeResult result =
+        util::withThreads(ctx, [&] { return rasterize(ps, params, ctx, source); });
+    if (!autoDevice.why().empty()) result.stats.device += " (" + autoDevice.why() + ")";
+    return result;
 }
 
 RasterizeResult rasterizeParticles(const ParticleSet& ps, const Params& params,

@@ -5,6 +5,7 @@
 #include <fluidsurf/SpacingEstimate.h>
 #include <fluidsurf/TransferAttributes.h>
 
+#include "backend/Backend.h"
 #include "post/IsolatedSpheres.h"
 #include "util/Memory.h"
 #include "util/Threads.h"
@@ -166,9 +167,12 @@ ReconstructResult reconstruct(const ParticleSet& particles, const ReconstructPar
     validate(params.post);
     checkAttributeNames(particles, params.attributes); // before the work, not after it
     ReconstructResult res;
+    // Device::Auto: the CPU for every stage of a run too small for the GPU to pay
+    const backend::AutoDevice autoDevice(ctx, particles.size());
     res.radius = chooseRadius(particles, params.radius, params.field.perParticleRadii, ctx);
     RasterizeResult field =
         rasterizeParticles(particles, params.fieldParams(res.radius.radius), ctx, sourceName);
+    if (!autoDevice.why().empty()) field.stats.device += " (" + autoDevice.why() + ")";
     ctx.throwIfCancelled();
     res.levelSet = std::move(field.grid); // the result's own: see keepGrids below
     res.adaptiveGrid = std::move(field.adaptive);

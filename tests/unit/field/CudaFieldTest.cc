@@ -287,7 +287,9 @@ TEST(FieldCuda, RequestWithoutGpuFailsClearly)
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("CUDA"), std::string::npos) << e.what();
     }
-    // Auto falls back to the CPU: the same grid as an explicit CPU run.
+    // Auto falls back to the CPU: the same grid as an explicit CPU run. (A run of so many
+    // frames that Auto's rule would take the GPU: AutoDeviceTest has the small runs.)
+    automatic.setFramesInRun(100000000);
     const RasterizeResult autoRun = rasterizeParticles(ps, p, automatic);
     EXPECT_EQ(autoRun.stats.device, "cpu");
     const RasterizeResult cpuRun = rasterizeParticles(ps, p, cpu);
