@@ -6,8 +6,11 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
+#include <cctype>
 #include <climits>
 #include <cstdlib>
+#include <cstring>
 #include <map>
 #include <set>
 
@@ -116,6 +119,30 @@ uint64_t inputBytes(const std::vector<FrameJob>& jobs, const std::vector<size_t>
             bytes += uint64_t(st.st_size);
     }
     return bytes;
+}
+
+bool worthPreparingDevice(const Context& ctx, const std::vector<FrameJob>& jobs,
+                          const std::vector<size_t>& todo)
+{
+    if (ctx.device() != Device::Auto) return ctx.device() == Device::Cuda;
+    auto endsWith = [](const std::string& s, const char* tail) {
+        const size_t n = std::strlen(tail);
+        return s.size() >= n && s.compare(s.size() - n, n, tail) == 0;
+    };
+    uint64_t largest = 0;
+    for (size_t i : todo) {
+        if (i >= jobs.size()) continue;
+        std::string input = jobs[i].input;
+        std::transform(input.begin(), input.end(), input.begin(),
+                       [](unsigned char c) { return char(std::tolower(c)); });
+        for (const char* compressed : {".gz", ".vtu", ".vtp", ".vdb"})
+            if (endsWith(input, compressed)) return true;
+        struct stat st;
+        if (::stat(jobs[i].input.c_str(), &st) != 0) return true; // (its reading says why)
+        largest = std::max(largest, uint64_t(st.st_size));
+    }
+    const double mostParticles = double(largest) / 6 * double(todo.size());
+    return mostParticles >= autoGpuParticles(ctx.runThreads());
 }
 
 std::vector<std::string> inputsOf(const std::vector<FrameJob>& jobs)

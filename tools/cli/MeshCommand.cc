@@ -445,13 +445,14 @@ Runner addReconstructCommand(CLI::App& app)
         const auto threadLimit = po.setUp(ctx);
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
-        prepareDevice(ctx.device());
         const std::vector<size_t> picked = shardOf(jobs, o->sequence.shard);
         SequenceRun run(o->sequence, po.quiet);
         const std::vector<size_t> todo = run.unfinished(picked, [&](size_t i) {
             return vdbJobs.empty() ? std::vector<std::string>{jobs[i].output}
                                    : std::vector<std::string>{jobs[i].output, vdbJobs[i].output};
         });
+        // the CUDA context (0.1-0.3 s) made while the first frame is read, where it may be used
+        if (worthPreparingDevice(ctx, jobs, todo)) prepareDevice(ctx.device());
         Progress bar(picked.size(), "reconstruct", po.quiet);
         Report report(po);
         FrameRun pr{po, jobs, todo, o->inFlight, run, bar};

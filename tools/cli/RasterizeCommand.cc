@@ -68,11 +68,11 @@ Runner addRasterizeCommand(CLI::App& app)
         const auto threadLimit = po.setUp(ctx);
         io::ReadOptions ro;
         ro.dropNonFinite = o->dropNonFinite;
-        prepareDevice(ctx.device());
         const std::vector<size_t> picked = shardOf(jobs, o->sequence.shard);
         SequenceRun run(o->sequence, po.quiet);
         const std::vector<size_t> todo = run.unfinished(
             picked, [&](size_t i) { return std::vector<std::string>{jobs[i].output}; });
+        if (worthPreparingDevice(ctx, jobs, todo)) prepareDevice(ctx.device());
         Progress bar(picked.size(), "rasterize", po.quiet);
         Report report(po);
         struct Made

@@ -127,6 +127,9 @@ public:
     /// ValueError outside [0, kMaxThreads]: TBB's arenas are not made for more (past 65536
     /// they crashed), and no machine has that many cores.
     void setThreads(int n);
+    /// The threads a run on this context has: threads() where set, at most the cores this
+    /// process may use; else those cores.
+    int runThreads() const;
     static constexpr int kMaxThreads = 4096;
 
     /// The most memory one request may take, in bytes: stages estimate what a large structure

@@ -5,8 +5,6 @@
 
 #include <fluidsurf/Rasterize.h>
 
-#include <tbb/info.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -55,8 +53,7 @@ namespace backend {
 AutoDevice::AutoDevice(Context& ctx, size_t particles) : mCtx(ctx)
 {
     if (ctx.device() != Device::Auto) return;
-    const int cores = tbb::info::default_concurrency(); // the cores this process may use
-    const int threads = ctx.threads() > 0 ? std::min(ctx.threads(), cores) : cores;
+    const int threads = ctx.runThreads();
     const double run = double(particles) * double(ctx.framesInRun());
     const double pays = autoGpuParticles(threads);
     if (run >= pays) return;

@@ -5,9 +5,12 @@
 #include <fluidsurf/Error.h>
 #include <fluidsurf/MemoryBudget.h>
 
+#include <tbb/info.h>
+
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -169,6 +172,12 @@ void Context::setThreads(int n)
         throw ValueError("threads = " + std::to_string(n) + ": between 0 (all cores) and " +
                          std::to_string(kMaxThreads) + " expected");
     mThreads = n;
+}
+
+int Context::runThreads() const
+{
+    const int cores = tbb::info::default_concurrency(); // (affinity and cgroup limits too)
+    return mThreads > 0 ? std::min(mThreads, cores) : cores;
 }
 
 namespace {
